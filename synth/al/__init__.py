@@ -1,0 +1,1 @@
+"""AL: names, grammar (Lark), AST with source positions, interpreter."""

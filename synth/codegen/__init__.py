@@ -1,0 +1,1 @@
+"""codegen stage of synth (see docs/design.md)."""

@@ -1,0 +1,1 @@
+"""errors stage of synth (see docs/design.md)."""

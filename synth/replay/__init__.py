@@ -1,0 +1,1 @@
+"""replay stage of synth (see docs/design.md)."""
