@@ -1,0 +1,431 @@
+"""The task specification: a pydantic schema for ``task.yaml``, SI units inside.
+
+A task describes a pin-in-hole workcell (seed ch. IV, L1120–3290):
+
+* ``frames`` — a tree of named objects and features. Every link has a parent (another frame or
+  ``world``), a nominal pose relative to it, a kind (``rigid`` / ``nonrigid`` / ``independent``,
+  as POINTY defines affixments, seed L6330 and L6840–6850) and an optional uncertainty block.
+* ``insertion`` — which pin goes into which hole, with the parameters of seed §4.2
+  (L1990–2010): direction, d_f, d_s, Δr_ok, Δθ_ok, derived from geometry unless overridden.
+* ``manipulator`` — the arm model, its park frame and the hand's positioning errors.
+
+Every dimensioned number carries its unit (``"3.85 cm"``, ``"5 deg"``), parsed by
+:mod:`synth.units`; the validated model holds SI floats (m, rad, N). ``docs/task-spec.md`` is the
+annotated reference. Semantic checks that need the whole tree (unknown parents, cycles, name
+clashes, infeasible constraints) live in :mod:`synth.models.loader`, which can point at YAML
+lines.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
+
+from synth.al.names import al_name_problem
+from synth.units import parse_quantity, registry
+
+WORLD = "world"
+"""Name of the root frame (the work station / table frame)."""
+
+TRANSLATION_PARAMS: tuple[str, ...] = ("x", "y", "z")
+ROTATION_PARAMS: tuple[str, ...] = ("rx", "ry", "rz")
+PARAMS: tuple[str, ...] = TRANSLATION_PARAMS + ROTATION_PARAMS
+"""Error parameters of a link, in the link's own frame: Δ = transl(x, y, z) ∘ rot(x̂, rx) ∘
+rot(ŷ, ry) ∘ rot(ẑ, rz), applied on the right of the nominal pose (seed A.2, L3190–3200)."""
+
+
+def _length(v: Any) -> float:
+    return parse_quantity(v, "length")
+
+
+def _angle(v: Any) -> float:
+    return parse_quantity(v, "angle")
+
+
+def _force(v: Any) -> float:
+    return parse_quantity(v, "force")
+
+
+Length = Annotated[float, BeforeValidator(_length)]
+"""A length given with its unit, stored in [m]."""
+Angle = Annotated[float, BeforeValidator(_angle)]
+"""An angle given with its unit, stored in [rad]."""
+Force = Annotated[float, BeforeValidator(_force)]
+"""A force (or a weight such as ``8 oz``), stored in [N]."""
+PositiveLength = Annotated[float, BeforeValidator(_length), Field(gt=0)]
+NonNegativeLength = Annotated[float, BeforeValidator(_length), Field(ge=0)]
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+def _check_al_name(value: str, *, allow_predeclared: bool = False) -> str:
+    problem = al_name_problem(value, allow_predeclared=allow_predeclared)
+    if problem:
+        raise ValueError(problem)
+    return value.upper()
+
+
+class Rotation(_Model):
+    """One elementary rotation ``rot(axis, angle)``; a pose composes a list left to right."""
+
+    axis: Literal["x", "y", "z"]
+    angle: Angle
+
+    @model_validator(mode="before")
+    @classmethod
+    def _from_short_form(cls, data: Any) -> Any:
+        # {z: "90 deg"} is the short form of {axis: z, angle: "90 deg"}.
+        if isinstance(data, dict) and len(data) == 1:
+            ((key, value),) = data.items()
+            if key in ("x", "y", "z"):
+                return {"axis": key, "angle": value}
+        return data
+
+
+class Pose(_Model):
+    """Nominal pose of a frame in its parent: ``trans(rot_1 ∘ rot_2 ∘ …, translation)``."""
+
+    translation: tuple[Length, Length, Length] = (0.0, 0.0, 0.0)
+    rotation: tuple[Rotation, ...] = ()
+
+
+class Bound(_Model):
+    """Closed interval [lo, hi] of one error parameter, SI units; lo ≤ 0 ≤ hi."""
+
+    lo: float
+    hi: float
+
+
+def _bound(kind: Literal["length", "angle"]) -> Any:
+    def parse(v: Any) -> Any:
+        if isinstance(v, Bound | dict):
+            return v
+        if isinstance(v, list | tuple):
+            if len(v) != 2:
+                raise ValueError("a bound is one tolerance ('0.3 in' means ±0.3 in) or [min, max]")
+            lo, hi = (parse_quantity(x, kind) for x in v)
+            if lo > hi:
+                raise ValueError(f"min {v[0]!r} exceeds max {v[1]!r}")
+            if lo > 0 or hi < 0:
+                raise ValueError("the nominal value (0) must lie inside [min, max]")
+            return {"lo": lo, "hi": hi}
+        tol = parse_quantity(v, kind)
+        if tol < 0:
+            raise ValueError(f"tolerance {v!r} is negative; write the half-width, e.g. '0.3 in'")
+        return {"lo": -tol, "hi": tol}
+
+    return BeforeValidator(parse)
+
+
+LengthBound = Annotated[Bound, _bound("length")]
+AngleBound = Annotated[Bound, _bound("angle")]
+
+
+class LinearConstraint(_Model):
+    """A coupled constraint ``min ≤ Σ c_k · v_k ≤ max`` between a link's error parameters.
+
+    Coefficients are numbers, or quantities that convert between kinds (``"2 cm/deg"`` on a
+    rotation parameter gives a length). Every term must have the dimension of the bound.
+    """
+
+    terms: dict[str, float]
+    min: float | None = None
+    max: float | None = None
+    kind: Literal["length", "angle"]
+
+    @model_validator(mode="before")
+    @classmethod
+    def _parse(cls, data: Any) -> Any:
+        if not isinstance(data, dict):
+            raise ValueError("a constraint is a mapping with 'terms' and 'min' and/or 'max'")
+        raw_terms = data.get("terms")
+        if not isinstance(raw_terms, dict) or not raw_terms:
+            raise ValueError("'terms' must map error parameters (x, y, z, rx, ry, rz) to coefficients")
+        if data.get("min") is None and data.get("max") is None:
+            raise ValueError("a constraint needs 'min', 'max' or both")
+        kind = _constraint_kind(data)
+        terms: dict[str, float] = {}
+        for param, coefficient in raw_terms.items():
+            if param not in PARAMS:
+                raise ValueError(f"unknown error parameter {param!r}; use one of {', '.join(PARAMS)}")
+            terms[param] = _coefficient_si(param, coefficient, kind)
+        out = {"terms": terms, "kind": kind}
+        for key in ("min", "max"):
+            if data.get(key) is not None:
+                out[key] = parse_quantity(data[key], kind)
+        extra = set(data) - {"terms", "min", "max"}
+        if extra:
+            raise ValueError(f"unknown constraint field(s): {', '.join(sorted(extra))}")
+        return out
+
+    @model_validator(mode="after")
+    def _ordered(self) -> LinearConstraint:
+        if self.min is not None and self.max is not None and self.min > self.max:
+            raise ValueError("constraint min exceeds max")
+        return self
+
+
+def _constraint_kind(data: dict[str, Any]) -> Literal["length", "angle"]:
+    bound = data.get("max") if data.get("max") is not None else data.get("min")
+    ureg = registry()
+    try:
+        q = ureg.Quantity(str(bound))
+    except Exception:
+        raise ValueError(f"cannot read constraint bound {bound!r} as a quantity") from None
+    if q.unitless:
+        raise ValueError(f"constraint bound {bound!r} has no unit")
+    if q.dimensionality == ureg.meter.dimensionality:
+        return "length"
+    if q.dimensionality == ureg.radian.dimensionality:
+        return "angle"
+    raise ValueError(f"constraint bound {bound!r} must be a length or an angle")
+
+
+def _coefficient_si(param: str, coefficient: Any, kind: Literal["length", "angle"]) -> float:
+    """SI value of a constraint coefficient, checking that c · param has the bound's kind."""
+    ureg = registry()
+    param_kind = "length" if param in TRANSLATION_PARAMS else "angle"
+    if isinstance(coefficient, bool):
+        raise ValueError(f"coefficient of {param} must be a number or a quantity")
+    if isinstance(coefficient, int | float):
+        value = float(coefficient)
+        if not math.isfinite(value):
+            raise ValueError(f"coefficient of {param} is not finite")
+        if param_kind != kind:
+            raise ValueError(
+                f"term {param} is a {param_kind} but the bound is a {kind}; give its coefficient "
+                f"a unit, e.g. '1 cm/deg'"
+            )
+        return value
+    try:
+        q = ureg.Quantity(str(coefficient))
+    except Exception:
+        raise ValueError(f"cannot read coefficient {coefficient!r} of {param}") from None
+    value = float(q.to_base_units().magnitude)
+    if not math.isfinite(value):
+        raise ValueError(f"coefficient of {param} is not finite")
+    length_dim = ureg.meter.dimensionality
+    if param_kind == kind and q.dimensionality == ureg.dimensionless.dimensionality:
+        return float(q.to("dimensionless").magnitude)
+    if param_kind == "angle" and kind == "length" and q.dimensionality == length_dim:
+        return float(q.to("m/rad").magnitude)
+    if param_kind == "length" and kind == "angle" and q.dimensionality == 1 / length_dim:
+        return float(q.to("rad/m").magnitude)
+    raise ValueError(f"coefficient {coefficient!r} of {param} does not turn a {param_kind} into a {kind}")
+
+
+class Uncertainty(_Model):
+    """Bounded error parameters of one link, in the link's frame (seed Eqn 3.5.1, L2205).
+
+    The true link is ``nominal ∘ transl(x, y, z) ∘ rot(x̂, rx) ∘ rot(ŷ, ry) ∘ rot(ẑ, rz)``.
+    Unlisted parameters are exact. ``distribution`` is for Monte Carlo sampling: ``uniform`` on
+    the feasible set, or ``normal`` with σ = tolerance/3 truncated at the tolerance (seed L7242).
+    """
+
+    x: LengthBound | None = None
+    y: LengthBound | None = None
+    z: LengthBound | None = None
+    rx: AngleBound | None = None
+    ry: AngleBound | None = None
+    rz: AngleBound | None = None
+    constraints: tuple[LinearConstraint, ...] = ()
+    distribution: Literal["uniform", "normal"] = "uniform"
+
+    def bounds(self) -> dict[str, Bound]:
+        """The bounded parameters in canonical order (x, y, z, rx, ry, rz)."""
+        return {p: getattr(self, p) for p in PARAMS if getattr(self, p) is not None}
+
+    @model_validator(mode="after")
+    def _constraints_use_bounded_params(self) -> Uncertainty:
+        bounded = self.bounds()
+        for i, c in enumerate(self.constraints):
+            for p in c.terms:
+                if p not in bounded:
+                    raise ValueError(
+                        f"constraints[{i}] uses {p}, which has no bound in this block; "
+                        f"every error parameter must be bounded"
+                    )
+        return self
+
+
+class BoxShape(_Model):
+    """A rectangular body; frame origin at the centre of its bottom face, z up."""
+
+    type: Literal["box"]
+    size: tuple[PositiveLength, PositiveLength, PositiveLength]
+
+
+class PinShape(_Model):
+    """A pin; frame origin at the tip centre, z from the tip towards the head (seed L2030)."""
+
+    type: Literal["pin"]
+    length: PositiveLength
+    diameter: PositiveLength
+    tip_taper_length: NonNegativeLength
+    tip_radius: NonNegativeLength
+    mass: Annotated[float, BeforeValidator(lambda v: parse_quantity(v, "mass")), Field(ge=0)] | None = None
+
+    @model_validator(mode="after")
+    def _consistent(self) -> PinShape:
+        if self.tip_radius > self.diameter / 2:
+            raise ValueError("tip_radius is larger than the shaft radius")
+        if self.tip_taper_length >= self.length:
+            raise ValueError("tip_taper_length must be shorter than the pin")
+        return self
+
+
+class HoleShape(_Model):
+    """A drilled hole; frame origin at the centre of its mouth, z along the outward normal."""
+
+    type: Literal["hole"]
+    diameter: PositiveLength
+    depth: PositiveLength
+    chamfer_width: NonNegativeLength = 0.0
+    surface: str
+
+
+class SurfaceShape(_Model):
+    """A planar face; the outline polygon lies in the frame's xy plane (z = outward normal).
+
+    The holes drilled into it are the hole features naming this surface; the tapping-place
+    search (seed L2300–2330) measures distances to them and to the outline.
+    """
+
+    type: Literal["surface"]
+    outline: tuple[tuple[Length, Length], ...]
+
+    @field_validator("outline")
+    @classmethod
+    def _polygon(cls, v: tuple[tuple[float, float], ...]) -> tuple[tuple[float, float], ...]:
+        if len(v) < 3:
+            raise ValueError("an outline needs at least three vertices")
+        area2 = sum(x0 * y1 - x1 * y0 for (x0, y0), (x1, y1) in zip(v, v[1:] + v[:1], strict=True))
+        if abs(area2) < 1e-12:
+            raise ValueError("the outline has zero area")
+        return v
+
+
+Shape = Annotated[BoxShape | PinShape | HoleShape | SurfaceShape, Field(discriminator="type")]
+
+OBJECT_SHAPES = frozenset({"box", "pin"})
+FEATURE_SHAPES = frozenset({"hole", "surface"})
+
+
+class FrameSpec(_Model):
+    """One node of the frame tree and the link to its parent."""
+
+    name: str
+    al_name: str
+    parent: str = WORLD
+    pose: Pose = Pose()
+    kind: Literal["rigid", "nonrigid", "independent"] = "nonrigid"
+    uncertainty: Uncertainty | None = None
+    shape: Shape | None = None
+
+    @field_validator("name")
+    @classmethod
+    def _name(cls, v: str) -> str:
+        if not v or not v.replace("_", "a").replace("-", "a").isalnum() or not v[0].isalpha():
+            raise ValueError("a frame name is a letter followed by letters, digits, '_' or '-'")
+        if v == WORLD:
+            raise ValueError("'world' is the root frame and cannot be redefined")
+        return v
+
+    @field_validator("al_name")
+    @classmethod
+    def _al_name(cls, v: str) -> str:
+        return _check_al_name(v)
+
+
+class InsertionSpec(_Model):
+    """Which pin goes into which hole, and the insertion parameters of seed §4.2 (L1990–2010).
+
+    Unset parameters are derived from the geometry by :func:`synth.models.insertion.derive`.
+    """
+
+    pin: str
+    hole: str
+    start_hole: str | None = None
+    direction: Literal["parallel", "antiparallel"] = "parallel"
+    d_f: NonNegativeLength | None = None
+    d_s: NonNegativeLength | None = None
+    dr_ok: NonNegativeLength | None = None
+    dtheta_ok: Annotated[float, BeforeValidator(_angle), Field(ge=0)] | None = None
+
+
+class ArmSpec(_Model):
+    """The arm model: the built-in Stanford arm (``model: stanford``) or a URDF.
+
+    ``base`` places the arm's base frame in the world. ``tool_frame`` names the URDF frame that
+    AL's hand frame (BHAND/BMANIP) is bound to.
+    """
+
+    model: Literal["stanford"] | None = None
+    urdf: str | None = None
+    tool_frame: str | None = None
+    package_dirs: tuple[str, ...] = ()
+    base: Pose = Pose()
+
+    @model_validator(mode="after")
+    def _one_source(self) -> ArmSpec:
+        if (self.model is None) == (self.urdf is None):
+            raise ValueError("name exactly one arm: 'model: stanford' or 'urdf: PATH'")
+        if self.urdf is not None and not self.tool_frame:
+            raise ValueError("a URDF arm needs 'tool_frame', the frame the hand is bound to")
+        return self
+
+
+class HandSpec(_Model):
+    """Two-finger hand geometry (seed L1984: fingers open through about 4.5 in)."""
+
+    max_opening: PositiveLength = 4.5 * 0.0254
+    finger_pad_radius: PositiveLength = 0.25 * 0.0254
+    finger_length: PositiveLength = 2.0 * 0.0254
+
+
+class ParkSpec(_Model):
+    """The arm's park frame (e.g. ``BPARK``), in world coordinates."""
+
+    al_name: str = "BPARK"
+    pose: Pose
+
+    @field_validator("al_name")
+    @classmethod
+    def _al(cls, v: str) -> str:
+        return _check_al_name(v, allow_predeclared=True)
+
+
+class ManipulatorSpec(_Model):
+    """The manipulator: arm model, hand, park frame and hand positioning errors."""
+
+    al_name: str = "BMANIP"
+    arm: ArmSpec
+    hand: HandSpec = HandSpec()
+    park: ParkSpec
+    hand_error: Uncertainty | None = None
+
+    @field_validator("al_name")
+    @classmethod
+    def _al(cls, v: str) -> str:
+        return _check_al_name(v, allow_predeclared=True)
+
+
+class TaskSpec(_Model):
+    """A whole task: frame tree, insertion and manipulator."""
+
+    name: str
+    description: str = ""
+    frames: tuple[FrameSpec, ...]
+    insertion: InsertionSpec | None = None
+    manipulator: ManipulatorSpec | None = None
+
+    @field_validator("frames")
+    @classmethod
+    def _nonempty(cls, v: tuple[FrameSpec, ...]) -> tuple[FrameSpec, ...]:
+        if not v:
+            raise ValueError("a task needs at least one frame")
+        return v
