@@ -1,0 +1,225 @@
+"""Load a task YAML into a validated :class:`~synth.models.spec.TaskSpec`.
+
+I/O lives here, at the edge. Every problem becomes one :class:`~synth.exceptions.SpecError`
+naming the field path and, where the YAML has one, the line: schema errors from pydantic, and
+the checks that need the whole tree (unknown parents, cycles, duplicate names, dangling
+references, infeasible constraint sets).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+from pydantic import ValidationError
+from scipy.optimize import linprog
+
+from synth.exceptions import SpecError
+from synth.models.spec import PARAMS, WORLD, TaskSpec, Uncertainty
+
+PathKey = tuple[str | int, ...]
+
+
+def load_task(path: str | Path) -> TaskSpec:
+    """Read and validate a task file; raise :class:`SpecError` on any problem."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise SpecError(str(p), "no such task file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SpecError(str(p), f"cannot read task file: {exc}") from None
+    return parse_task(text, source=str(p))
+
+
+def parse_task(text: str, *, source: str = "<task>") -> TaskSpec:
+    """Validate task YAML text (or JSON, which is YAML) into a :class:`TaskSpec`."""
+    data, lines = _load_yaml(text, source)
+    if not isinstance(data, dict):
+        raise SpecError("", "a task is a YAML mapping with 'name' and 'frames'", 1)
+    return validate_task(data, lines)
+
+
+def validate_task(data: dict[str, Any], lines: dict[PathKey, int] | None = None) -> TaskSpec:
+    """Validate an already-parsed mapping (e.g. a JSON request body) into a :class:`TaskSpec`."""
+    lines = lines or {}
+    try:
+        spec = TaskSpec.model_validate(data)
+    except ValidationError as exc:
+        err = exc.errors(include_url=False)[0]
+        loc = _strip_union_tags(err["loc"])
+        message = _message(err)
+        raise SpecError(format_path(loc), message, _line_of(loc, lines)) from None
+    check_task(spec, lines)
+    return spec
+
+
+def check_task(spec: TaskSpec, lines: dict[PathKey, int] | None = None) -> None:
+    """Checks that need the whole tree; raise :class:`SpecError` at the first failure."""
+    lines = lines or {}
+
+    def fail(loc: PathKey, message: str) -> None:
+        raise SpecError(format_path(loc), message, _line_of(loc, lines))
+
+    index: dict[str, int] = {}
+    al_names: dict[str, PathKey] = {}
+    for i, f in enumerate(spec.frames):
+        if f.name in index:
+            fail(("frames", i, "name"), f"duplicate frame name {f.name!r}")
+        index[f.name] = i
+        if f.al_name in al_names:
+            fail(("frames", i, "al_name"), f"AL name {f.al_name!r} is already used")
+        al_names[f.al_name] = ("frames", i, "al_name")
+    if spec.manipulator is not None:
+        for loc, name in (
+            (("manipulator", "al_name"), spec.manipulator.al_name),
+            (("manipulator", "park", "al_name"), spec.manipulator.park.al_name),
+        ):
+            if name in al_names:
+                fail(loc, f"AL name {name!r} is already used by a frame")
+            al_names[name] = loc
+
+    for i, f in enumerate(spec.frames):
+        if f.parent != WORLD and f.parent not in index:
+            fail(("frames", i, "parent"), f"unknown parent {f.parent!r}")
+    for i, f in enumerate(spec.frames):
+        seen = {f.name}
+        node = f
+        while node.parent != WORLD:
+            if node.parent in seen:
+                fail(("frames", i, "parent"), f"frame {f.name!r} is in a cycle of parents")
+            seen.add(node.parent)
+            node = spec.frames[index[node.parent]]
+
+    for i, f in enumerate(spec.frames):
+        if f.shape is not None and f.shape.type == "hole":
+            target = index.get(f.shape.surface)
+            if target is None:
+                fail(("frames", i, "shape", "surface"), f"unknown surface {f.shape.surface!r}")
+            else:
+                surface_shape = spec.frames[target].shape
+                if surface_shape is None or surface_shape.type != "surface":
+                    fail(("frames", i, "shape", "surface"), f"{f.shape.surface!r} is not a surface")
+        if f.uncertainty is not None:
+            _check_feasible(f.uncertainty, ("frames", i, "uncertainty"), fail)
+    if spec.manipulator is not None and spec.manipulator.hand_error is not None:
+        _check_feasible(spec.manipulator.hand_error, ("manipulator", "hand_error"), fail)
+
+    ins = spec.insertion
+    if ins is not None:
+        by_any = {f.name: f for f in spec.frames} | {f.al_name: f for f in spec.frames}
+        for field, want in (("pin", "pin"), ("hole", "hole"), ("start_hole", "hole")):
+            ref = getattr(ins, field)
+            if ref is None:
+                continue
+            frame = by_any.get(ref) or by_any.get(ref.upper())
+            if frame is None:
+                fail(("insertion", field), f"unknown frame {ref!r}")
+            elif frame.shape is None or frame.shape.type != want:
+                fail(("insertion", field), f"{ref!r} is not a {want}")
+
+
+def _check_feasible(unc: Uncertainty, loc: PathKey, fail: Any) -> None:
+    """Fail if the block's bounds and coupled constraints admit no parameter vector (LP)."""
+    if not unc.constraints:
+        return
+    names = list(unc.bounds())
+    bounds = [(b.lo, b.hi) for b in unc.bounds().values()]
+    rows: list[np.ndarray] = []
+    rhs: list[float] = []
+    for c in unc.constraints:
+        row = np.array([c.terms.get(n, 0.0) for n in names])
+        if c.max is not None:
+            rows.append(row)
+            rhs.append(c.max)
+        if c.min is not None:
+            rows.append(-row)
+            rhs.append(-c.min)
+    res = linprog(np.zeros(len(names)), A_ub=np.array(rows), b_ub=np.array(rhs), bounds=bounds,
+                  method="highs")
+    if res.status == 2:
+        fail((*loc, "constraints"), "the constraints and bounds admit no error values (infeasible)")
+    if res.status != 0:
+        fail((*loc, "constraints"), f"could not check the constraints: {res.message}")
+
+
+def _message(err: dict[str, Any]) -> str:
+    msg = str(err.get("msg", "invalid value"))
+    for prefix in ("Value error, ", "Assertion failed, "):
+        if msg.startswith(prefix):
+            msg = msg[len(prefix):]
+    if err.get("type") == "missing":
+        return "this field is required"
+    if err.get("type") == "extra_forbidden":
+        return "unknown field"
+    return msg
+
+
+def _strip_union_tags(loc: tuple[Any, ...]) -> PathKey:
+    # Pydantic puts the discriminator value ("hole", "pin", …) into the location of a tagged
+    # union member and wraps BeforeValidator chains in "function-before[...]"; neither is a
+    # field the user wrote.
+    out: list[str | int] = []
+    for part in loc:
+        if isinstance(part, str) and ("[" in part or part in ("box", "pin", "hole", "surface")) and out and out[-1] == "shape":
+            continue
+        if isinstance(part, str) and part.startswith("function-"):
+            continue
+        out.append(part)
+    return tuple(out)
+
+
+def format_path(loc: PathKey) -> str:
+    """``('frames', 2, 'uncertainty', 'x')`` → ``'frames[2].uncertainty.x'``."""
+    text = ""
+    for part in loc:
+        if isinstance(part, int):
+            text += f"[{part}]"
+        else:
+            text += f".{part}" if text else str(part)
+    return text
+
+
+def _line_of(loc: PathKey, lines: dict[PathKey, int]) -> int | None:
+    # The deepest prefix of the path that the YAML has a node for.
+    for n in range(len(loc), -1, -1):
+        if loc[:n] in lines:
+            return lines[loc[:n]]
+    return None
+
+
+def _load_yaml(text: str, source: str) -> tuple[Any, dict[PathKey, int]]:
+    try:
+        node = yaml.compose(text, Loader=yaml.SafeLoader)
+        data = yaml.safe_load(text)
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        line = mark.line + 1 if mark is not None else None
+        raise SpecError(source, f"YAML syntax error: {exc.problem or exc}", line) from None
+    except yaml.YAMLError as exc:
+        raise SpecError(source, f"YAML error: {exc}") from None
+    lines: dict[PathKey, int] = {}
+    if node is not None:
+        for path, n in _walk(node, ()):
+            lines[path] = n.start_mark.line + 1
+    return data, lines
+
+
+def _walk(node: yaml.Node, path: PathKey) -> Iterator[tuple[PathKey, yaml.Node]]:
+    yield path, node
+    if isinstance(node, yaml.MappingNode):
+        for key, value in node.value:
+            k = key.value if isinstance(key, yaml.ScalarNode) else str(key)
+            yield (*path, k), key
+            for sub_path, sub in _walk(value, (*path, k)):
+                if sub_path != (*path, k):
+                    yield sub_path, sub
+    elif isinstance(node, yaml.SequenceNode):
+        for i, item in enumerate(node.value):
+            yield from _walk(item, (*path, i))
+
+
+__all__ = ["PARAMS", "check_task", "format_path", "load_task", "parse_task", "validate_task"]
