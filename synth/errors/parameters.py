@@ -76,6 +76,8 @@ class ParameterSpace:
     @property
     def offsets(self) -> tuple[int, ...]:
         """Start index of each block in ``v``."""
+        if not self.blocks:
+            return ()
         return tuple(itertools.accumulate((b.size for b in self.blocks[:-1]), initial=0))
 
     @property

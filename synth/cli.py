@@ -1,0 +1,81 @@
+"""Command line: ``synth errors``, ``synth locate``, … — parsing, I/O and printing only.
+
+Every :class:`~synth.exceptions.SynthError` becomes one line on stderr and exit code 2; a usage
+error from argparse also exits 2. Unexpected failures print one line too (exit 70) unless
+``SYNTH_DEBUG=1`` asks for the traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from collections.abc import Callable, Sequence
+
+from synth.exceptions import SynthError
+
+EXIT_USAGE = 2
+EXIT_INTERNAL = 70
+
+Command = Callable[[argparse.Namespace], int]
+
+
+def _cmd_errors(args: argparse.Namespace) -> int:
+    from synth.errors.chain import chain_between
+    from synth.errors.estimate import estimate_errors
+    from synth.models.graph import AttributeGraph
+    from synth.models.loader import load_task
+    from synth.report import errors_table
+
+    graph = AttributeGraph(load_task(args.task))
+    start, end = graph.resolve(args.from_), graph.resolve(args.to)
+    report = estimate_errors(chain_between(graph, start, end), start, end)
+    if args.json:
+        print(json.dumps(report.to_json(), indent=2))
+    else:
+        print(errors_table(report, graph))
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``synth`` command."""
+    parser = argparse.ArgumentParser(
+        prog="synth",
+        description="Task-level synthesis of AL pin-in-hole programs (after Taylor, 1976).",
+    )
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p = sub.add_parser("errors", help="bound the run-time error of one frame relative to another")
+    p.add_argument("task", help="task specification (YAML)")
+    p.add_argument("--from", dest="from_", required=True, metavar="A",
+                   help="reference frame: a frame name or its AL name (e.g. BH1)")
+    p.add_argument("--to", required=True, metavar="B", help="frame whose error is bounded")
+    p.add_argument("--json", action="store_true", help="print JSON (SI units)")
+    p.set_defaults(func=_cmd_errors)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``synth`` console script."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    func: Command = args.func
+    try:
+        return func(args)
+    except SynthError as exc:
+        print(f"synth {args.command}: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("synth: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:
+        if os.environ.get("SYNTH_DEBUG"):
+            raise
+        print(f"synth {args.command}: internal error: {type(exc).__name__}: {exc} "
+              "(set SYNTH_DEBUG=1 for a traceback)", file=sys.stderr)
+        return EXIT_INTERNAL
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
