@@ -55,3 +55,42 @@ class InfeasibleConstraintsError(SynthError):
 
 class EstimationError(SynthError):
     """An error bound could not be computed (e.g. the LP solver failed)."""
+
+
+class ALSyntaxError(SynthError):
+    """AL text does not parse.
+
+    ``line`` and ``column`` (1-based) locate the offending token or character; ``context`` is
+    that source line with a caret under it (lark's ``get_context``); ``expected`` describes what
+    the grammar would accept there (``"THEN"``, ``"';'"``, ``"an expression"``); ``hint``
+    names a common mistake when one is recognised (``"AL has no ';' before ELSE"``). The
+    message is one line: ``file:line:column: problem (hint); expected one of: ...``.
+    """
+
+    def __init__(
+        self,
+        line: int,
+        column: int,
+        problem: str,
+        *,
+        context: str = "",
+        expected: tuple[str, ...] = (),
+        filename: str = "<al>",
+        hint: str | None = None,
+    ) -> None:
+        self.line = line
+        self.column = column
+        self.problem = problem
+        self.context = context
+        self.expected = expected
+        self.filename = filename
+        self.hint = hint
+        text = f"{filename}:{line}:{column}: {problem}"
+        if hint:
+            text += f" ({hint})"
+        if expected:
+            if len(expected) == 1:
+                text += f"; expected {expected[0]}"
+            else:
+                text += f"; expected one of: {', '.join(expected)}"
+        super().__init__(text)
