@@ -94,3 +94,54 @@ class ALSyntaxError(SynthError):
             else:
                 text += f"; expected one of: {', '.join(expected)}"
         super().__init__(text)
+
+
+class ArmModelError(SynthError):
+    """An arm model or collision scene cannot be built.
+
+    Raised for an unreadable URDF or parameter file, an unknown tool frame, joint types the arm
+    layer does not handle, a joint-limit override of the wrong length, or clashing geometry
+    names. ``source`` names the file or spec field at fault (empty when not applicable).
+    """
+
+    def __init__(self, message: str, source: str = "") -> None:
+        self.source = source
+        super().__init__(f"{source}: {message}" if source else message)
+
+
+class UnreachableError(SynthError):
+    """No attainable arm solution reaches a hand pose.
+
+    ``translation`` [m] and ``rotation`` (row-major 3×3) give the requested pose of the hand in
+    the world frame; ``reason`` says which constraint failed first (out of reach, joint limit).
+    """
+
+    def __init__(
+        self,
+        translation: tuple[float, float, float],
+        rotation: tuple[float, ...],
+        reason: str,
+    ) -> None:
+        self.translation = translation
+        self.rotation = rotation
+        self.reason = reason
+        x, y, z = (100.0 * v for v in translation)
+        super().__init__(f"hand pose at ({x:.2f}, {y:.2f}, {z:.2f}) cm is unreachable: {reason}")
+
+
+class NoSolutionFound(SynthError):
+    """A numerical inverse-kinematics problem has no solution within its options.
+
+    ``problem`` is the problem as built (target, options, limits); ``result`` the best attempt
+    (its residual tells how close the solver came). Unlike :class:`UnreachableError` this does
+    not prove the pose unreachable: the solver may have missed a solution.
+    """
+
+    def __init__(self, problem: object, result: object, message: str) -> None:
+        self.problem = problem
+        self.result = result
+        super().__init__(message)
+
+
+class TrajectoryError(SynthError):
+    """A time-optimal trajectory could not be computed (limits violated or solver failure)."""
