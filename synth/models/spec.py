@@ -357,11 +357,51 @@ class InsertionSpec(_Model):
     dtheta_ok: Annotated[float, BeforeValidator(_angle), Field(ge=0)] | None = None
 
 
+def _joint_rates(order: int) -> Any:
+    """Per-joint rate limits with units, e.g. ``["2 rad/s", "50 cm/s"]`` → SI floats.
+
+    ``order`` is the power of time: 1 velocity ([rad/s] or [m/s]), 2 acceleration, 3 jerk. A
+    revolute joint takes an angular rate, a prismatic joint a linear one; both are stored as SI
+    magnitudes in joint order, and :func:`synth.models.arm.load_arm` checks the count.
+    """
+
+    def parse(v: Any) -> Any:
+        if v is None:
+            return None
+        if isinstance(v, str) or not isinstance(v, list | tuple):
+            raise ValueError("give one rate per joint as a list, e.g. ['2 rad/s', '0.5 m/s']")
+        ureg = registry()
+        out = []
+        for item in v:
+            if isinstance(item, bool) or not isinstance(item, str):
+                raise ValueError(f"{item!r} has no unit; write e.g. '2 rad/s' or '0.5 m/s'")
+            try:
+                q: Any = ureg.Quantity(item.strip())
+            except Exception:
+                raise ValueError(f"cannot read {item!r} as a quantity") from None
+            angular = (ureg.second**-order).dimensionality
+            linear = (ureg.meter * ureg.second**-order).dimensionality
+            if q.dimensionality not in (angular, linear):
+                unit = "s" if order == 1 else f"s^{order}"
+                raise ValueError(f"{item!r} is not a rate per {unit} (rad/{unit} or m/{unit})")
+            value = float(q.to_base_units().magnitude)
+            if not math.isfinite(value) or value <= 0:
+                raise ValueError(f"{item!r} must be positive and finite")
+            out.append(value)
+        return tuple(out)
+
+    return BeforeValidator(parse)
+
+
 class ArmSpec(_Model):
     """The arm model: the built-in Stanford arm (``model: stanford``) or a URDF.
 
     ``base`` places the arm's base frame in the world. ``tool_frame`` names the URDF frame that
-    AL's hand frame (BHAND/BMANIP) is bound to.
+    AL's hand frame (BHAND/BMANIP) is bound to, and ``tool_offset`` the hand frame's pose in it
+    (e.g. from a bare flange such as the UR5's ``tool0`` to the point between the finger pads).
+    ``srdf`` lists link pairs whose collisions are disabled (``<disable_collisions>``).
+    ``velocity_limits``, ``acceleration_limits``, ``jerk_limits`` override the model's per-joint
+    limits (one entry per joint, with units; SI floats inside).
     """
 
     model: Literal["stanford"] | None = None
@@ -369,6 +409,11 @@ class ArmSpec(_Model):
     tool_frame: str | None = None
     package_dirs: tuple[str, ...] = ()
     base: Pose = Pose()
+    tool_offset: Pose = Pose()
+    srdf: str | None = None
+    velocity_limits: Annotated[tuple[float, ...] | None, _joint_rates(1)] = None
+    acceleration_limits: Annotated[tuple[float, ...] | None, _joint_rates(2)] = None
+    jerk_limits: Annotated[tuple[float, ...] | None, _joint_rates(3)] = None
 
     @model_validator(mode="after")
     def _one_source(self) -> ArmSpec:
@@ -380,11 +425,18 @@ class ArmSpec(_Model):
 
 
 class HandSpec(_Model):
-    """Two-finger hand geometry (seed L1984: fingers open through about 4.5 in)."""
+    """Two-finger hand geometry (seed L1984: fingers open through about 4.5 in).
+
+    In the hand frame (origin between the finger pads, z the approach vector) the fingers close
+    along x: each is a plate ``finger_thickness`` thick, as wide as a pad, reaching
+    ``finger_length`` back to the palm, a box of ``palm_size`` (x, y, z) behind them.
+    """
 
     max_opening: PositiveLength = 4.5 * 0.0254
     finger_pad_radius: PositiveLength = 0.25 * 0.0254
     finger_length: PositiveLength = 2.0 * 0.0254
+    finger_thickness: PositiveLength = 0.01
+    palm_size: tuple[PositiveLength, PositiveLength, PositiveLength] = (0.14, 0.05, 0.03)
 
 
 class ParkSpec(_Model):
