@@ -35,8 +35,11 @@ class SpecError(SynthError):
         self.detail = message
 
 
-class UnitError(SynthError):
-    """A quantity has no unit, an unknown unit, or a unit of the wrong dimension."""
+class UnitError(SynthError, ValueError):
+    """A quantity has no unit, an unknown unit, or a unit of the wrong dimension.
+
+    Also a ``ValueError`` so that pydantic reports it as a field error with its path.
+    """
 
 
 class FrameLookupError(SynthError):

@@ -1,0 +1,157 @@
+"""Error machinery beyond the seed's examples: coupled constraints, random chains, monotonicity."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from synth.errors.bounds import bound_linear, closed_form_bound
+from synth.errors.chain import ErrorChain, Fixed, Perturbation, chain_between
+from synth.errors.estimate import estimate_errors
+from synth.errors.parameters import ParameterBlock, ParameterSpace
+from synth.errors.taylor import TaylorModel, rotation_remainder
+from synth.models.graph import AttributeGraph
+from synth.models.loader import parse_task
+from synth.models.spec import Uncertainty
+
+COUPLED = """\
+name: coupled
+frames:
+  - name: box
+    al_name: BOX
+    pose: {translation: [40 cm, 100 cm, 0 cm]}
+    uncertainty:
+      x: 0.3 in
+      y: 0.3 in
+      rz: 5 deg
+      constraints:
+        - {terms: {x: 1, y: 1}, max: 0.2 in, min: -0.2 in}
+        - {terms: {x: 1, rz: 2 cm/deg}, max: 0.25 in}
+  - name: hole
+    al_name: BH1
+    parent: box
+    pose: {translation: [3.85 cm, 3.20 cm, 4.90 cm]}
+"""
+
+
+def test_coupled_constraints_use_the_lp_and_stay_certified() -> None:
+    graph = AttributeGraph(parse_task(COUPLED))
+    chain = chain_between(graph, "world", "hole")
+    assert not chain.space.is_box
+    report = estimate_errors(chain)
+    # The box hull alone would allow |Δx + Δy| = .6 in; the constraint caps x + y at .2 in, so
+    # the LP bound along (1, 1)/√2 is far below the closed-form box bound.
+    from synth.errors.estimate import RelationModel
+
+    rel = RelationModel.of(chain)
+    c = rel.displacement.linear @ np.array([1.0, 1.0, 0.0])
+    lp = bound_linear(c, chain.space)
+    box = closed_form_bound(c, chain.space)
+    assert lp.hi < 0.75 * box.hi
+    # Monte Carlo through the exact chain (rejection sampling honours the constraints).
+    rng = np.random.default_rng(5)
+    v = np.vstack([chain.space.sample(rng, 40_000), chain.space.corners()])
+    assert np.all(chain.space.feasible(v))
+    _, pos = chain.evaluate(v)
+    dp = pos - chain.nominal.translation
+    assert (dp @ [1.0, 1.0, 0.0]).max() <= lp.hi + np.abs([1.0, 1.0, 0.0]) @ rel.displacement.remainder
+    for k, key in enumerate(("dx", "dy", "dz")):
+        iv = getattr(report.certified, key)
+        assert iv.lo <= dp[:, k].min() and dp[:, k].max() <= iv.hi
+    # LP extrema are attained: a sampled point comes within 5% of the first-order bound of Δx.
+    assert dp[:, 0].max() >= 0.95 * report.first_order.dx.hi
+
+
+def test_rotation_remainder_is_exact_at_the_tolerance() -> None:
+    for axis in range(3):
+        for a in (1e-3, 0.1, 1.0, 3.0):
+            bound = rotation_remainder(axis, a)
+            for theta in np.linspace(-a, a, 41):
+                k = np.eye(3)[axis] * theta
+                rest = pin.exp3(k) - np.eye(3) - pin.skew(k)
+                assert np.all(np.abs(rest) <= bound + 1e-15)
+            # Attained at |θ| = a: the bound is tight, not merely safe.
+            k = np.eye(3)[axis] * a
+            assert np.abs(pin.exp3(k) - np.eye(3) - pin.skew(k)).max() == pytest.approx(bound.max())
+
+
+def _random_chain(seed: int, scale: float) -> ErrorChain:
+    rng = np.random.default_rng(seed)
+    blocks = []
+    terms: list[Fixed | Perturbation] = []
+    for i in range(4):
+        tol_t = scale * rng.uniform(0.001, 0.02)
+        tol_r = scale * rng.uniform(0.001, 0.2)
+        unc = Uncertainty.model_validate(
+            {"x": f"{tol_t} m", "y": f"{tol_t / 2} m", "z": f"{tol_t} m",
+             "rx": f"{tol_r} rad", "ry": f"{tol_r / 3} rad", "rz": f"{tol_r} rad"}
+        )
+        blocks.append(ParameterBlock.from_uncertainty(f"b{i}", unc))
+        terms.append(Fixed(pin.SE3(pin.exp3(rng.normal(size=3)), rng.normal(scale=0.3, size=3))))
+        terms.append(Perturbation(i, inverse=bool(i % 2)))
+    terms.append(Fixed(pin.SE3(pin.exp3(rng.normal(size=3)), rng.normal(scale=0.3, size=3))))
+    return ErrorChain(ParameterSpace(tuple(blocks)), tuple(terms))
+
+
+@settings(max_examples=15, deadline=None)
+@given(seed=st.integers(0, 10_000), scale=st.floats(0.1, 1.0))
+def test_certified_bounds_contain_random_chains(seed: int, scale: float) -> None:
+    chain = _random_chain(seed, scale)
+    report = estimate_errors(chain)
+    rng = np.random.default_rng(seed)
+    v = np.vstack([chain.space.sample(rng, 3000), chain.space.corners()[:4096]])
+    rot, pos = chain.evaluate(v)
+    dp = pos - chain.nominal.translation
+    w = np.array([pin.log3(r @ chain.nominal.rotation.T) for r in rot[:500]])
+    for k, key in enumerate(("dx", "dy", "dz")):
+        iv = getattr(report.certified, key)
+        assert iv.lo - 1e-12 <= dp[:, k].min() and dp[:, k].max() <= iv.hi + 1e-12
+    for k, key in enumerate(("dtheta_x", "dtheta_y", "dtheta_z")):
+        iv = getattr(report.certified, key)
+        assert iv.lo - 1e-12 <= w[:, k].min() and w[:, k].max() <= iv.hi + 1e-12
+
+
+@settings(max_examples=20, deadline=None)
+@given(t1=st.floats(0.01, 1.0), t2=st.floats(0.01, 1.0), r1=st.floats(0.1, 10.0))
+def test_bounds_grow_with_tolerance(t1: float, t2: float, r1: float) -> None:
+    small, large = sorted((t1, t2))
+
+    def report(tol: float):  # noqa: ANN202
+        text = COUPLED.replace("x: 0.3 in\n      y: 0.3 in", f"x: {tol} in\n      y: {tol} in")
+        text = text.replace("rz: 5 deg", f"rz: {r1} deg").split("      constraints:")[0]
+        text += "  - {name: hole, al_name: BH1, parent: box, pose: {translation: [3 cm, 3 cm, 4 cm]}}\n"
+        graph = AttributeGraph(parse_task(text))
+        return estimate_errors(chain_between(graph, "world", "hole"))
+
+    a, b = report(small), report(large)
+    for key in ("dx", "dy", "dz"):
+        assert getattr(a.first_order, key).hi <= getattr(b.first_order, key).hi + 1e-15
+        assert getattr(a.certified, key).hi <= getattr(b.certified, key).hi + 1e-15
+
+
+def test_taylor_product_remainder_is_rigorous() -> None:
+    """rot(x̂,a)·rot(ŷ,b)·rot(ẑ,c): exact product minus linear part stays inside the bound."""
+    m = np.array([0.3, 0.2, 0.25])
+    tm = TaylorModel.rotation(0, 0, m) @ TaylorModel.rotation(1, 1, m) @ TaylorModel.rotation(2, 2, m)
+    rng = np.random.default_rng(0)
+    for v in rng.uniform(-m, m, size=(2000, 3)):
+        exact = pin.exp3(np.array([v[0], 0, 0])) @ pin.exp3(np.array([0, v[1], 0])) @ pin.exp3(np.array([0, 0, v[2]]))
+        linear = tm.value + np.tensordot(v, tm.linear, axes=1)
+        assert np.all(np.abs(exact - linear) <= tm.remainder + 1e-15)
+    assert tm.remainder.max() < 0.5 * m.sum() ** 2  # second order, not a vacuous bound
+
+
+def test_huge_rotations_are_refused() -> None:
+    text = COUPLED.replace("rz: 5 deg", "rz: 170 deg").split("      constraints:")[0]
+    text += "  - {name: hole, al_name: BH1, parent: box, pose: {translation: [3 cm, 3 cm, 4 cm]}}\n"
+    from synth.exceptions import EstimationError
+
+    graph = AttributeGraph(parse_task(text))
+    with pytest.raises(EstimationError, match="too large"):
+        estimate_errors(chain_between(graph, "world", "hole"))
+    assert math.isfinite(rotation_remainder(2, math.pi).max())

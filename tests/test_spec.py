@@ -1,0 +1,155 @@
+"""Task spec validation: units, AL names, tree checks, and bad input through the CLI."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+from synth.cli import main
+from synth.exceptions import SpecError, UnitError
+from synth.models.graph import AttributeGraph
+from synth.models.insertion import derive
+from synth.models.loader import load_task, parse_task
+from synth.units import parse_quantity
+
+GOOD = textwrap.dedent(
+    """\
+    name: t
+    frames:
+      - name: box
+        al_name: BOX
+        pose: {translation: [1 cm, 2 cm, 0 cm]}
+        uncertainty:
+          x: 0.3 in
+          rz: 5 deg
+      - name: hole
+        al_name: BH1
+        parent: box
+        pose: {translation: [0 cm, 0 cm, 4 cm]}
+    """
+)
+
+
+def test_units_convert_to_si() -> None:
+    assert parse_quantity("3.85 cm", "length") == pytest.approx(0.0385)
+    assert parse_quantity("0.3 in", "length") == pytest.approx(0.3 * 0.0254)
+    assert parse_quantity("5 deg", "angle") == pytest.approx(math.radians(5))
+    # 8 oz read as a force is the weight of 8 avoirdupois ounces: 8 × 28.349523125 g × g₀.
+    assert parse_quantity("8 oz", "force") == pytest.approx(8 * 0.028349523125 * 9.80665)
+    with pytest.raises(UnitError, match="no unit"):
+        parse_quantity("3.85", "length")
+    with pytest.raises(UnitError, match="not a length"):
+        parse_quantity("5 deg", "length")
+
+
+def test_good_spec_loads_and_composes() -> None:
+    spec = parse_task(GOOD)
+    graph = AttributeGraph(spec)
+    assert graph.resolve("bh1") == "hole"
+    assert graph.world_from("hole").translation == pytest.approx([0.01, 0.02, 0.04])
+    box = spec.frames[0].uncertainty
+    assert box is not None and box.x is not None
+    assert (box.x.lo, box.x.hi) == pytest.approx((-0.00762, 0.00762))
+
+
+def test_seed_fixture_composes_the_seed_frames() -> None:
+    graph = AttributeGraph(load_task("fixtures/tasks/seed_4_8.yaml"))
+    # T_wp = trans(rot(ẑ, 90°), (24.1, 117, .537) cm), seed L2577.
+    pin_pose = graph.world_from("PIN1")
+    assert pin_pose.translation == pytest.approx([0.241, 1.17, 0.00537])
+    assert pin_pose.rotation[:, 0] == pytest.approx([0.0, 1.0, 0.0], abs=1e-12)
+    assert graph.world_from("BH1").translation == pytest.approx([0.4905, 1.052, 0.049])
+    assert [n.al_name for n in graph.holes_in("box_top")] == ["BH1", "BH2", "BH3", "BH4"]
+    path = graph.path("BH1", "PIN1")
+    assert path.ancestor == "world"
+    assert [link.child for link in path.up] == ["bh1", "box"]
+    assert [link.child for link in path.down] == ["rack", "rh1", "pin1"]
+
+
+def test_insertion_parameters_given_and_derived() -> None:
+    spec = load_task("fixtures/tasks/seed_4_8.yaml")
+    graph = AttributeGraph(spec)
+    assert spec.insertion is not None
+    given = derive(graph, spec.insertion)
+    assert given.d_f == pytest.approx(0.0171) and given.dtheta_ok == pytest.approx(math.radians(10))
+    bare = spec.insertion.model_copy(update={"d_f": None, "dr_ok": None, "dtheta_ok": None})
+    derived = derive(graph, bare)
+    # Whitney's lead: chamfer .25 + (hole radius .32 − tip radius .13) = .44 cm.
+    assert derived.dr_ok == pytest.approx(0.0044)
+    assert derived.d_f == pytest.approx(0.0171)  # the hole depth: the pin bottoms out
+    assert derived.dtheta_ok == pytest.approx(math.atan2(0.44, 0.34 + 0.25))
+    assert derived.source["dr_ok"] == "derived" and given.source["dr_ok"] == "given"
+
+
+BAD = [
+    ("unknown parent", GOOD.replace("parent: box", "parent: bx"), "frames[1].parent", 11),
+    ("missing unit", GOOD.replace("x: 0.3 in", "x: 0.3"), "frames[0].uncertainty.x", 7),
+    ("wrong unit", GOOD.replace("rz: 5 deg", "rz: 5 cm"), "frames[0].uncertainty.rz", 8),
+    ("negative tolerance", GOOD.replace("x: 0.3 in", "x: -0.3 in"), "frames[0].uncertainty.x", 7),
+    ("NaN", GOOD.replace("2 cm", "nan cm"), "frames[0].pose.translation[1]", 5),
+    ("AL keyword", GOOD.replace("al_name: BOX", "al_name: MOVE"), "frames[0].al_name", 4),
+    ("bad AL name", GOOD.replace("al_name: BOX", "al_name: 2BOX"), "frames[0].al_name", 4),
+    ("duplicate AL name", GOOD.replace("al_name: BH1", "al_name: box"), "frames[1].al_name", 10),
+    ("unknown field", GOOD.replace("name: t", "name: t\nfoo: 1"), "foo", 2),
+    ("cycle", GOOD.replace("    al_name: BOX\n", "    al_name: BOX\n    parent: hole\n"),
+     "frames[0].parent", 5),
+    ("infeasible", GOOD.replace("rz: 5 deg", "rz: 5 deg\n      constraints:\n"
+                                "        - {terms: {x: 1}, min: 1 in}"),
+     "frames[0].uncertainty.constraints", 9),
+    ("bad coefficient kind", GOOD.replace("rz: 5 deg", "rz: 5 deg\n      constraints:\n"
+                                          "        - {terms: {x: 1, rz: 1}, max: 1 in}"),
+     "frames[0].uncertainty.constraints[0]", 10),
+]
+
+
+@pytest.mark.parametrize(("label", "text", "path", "line"), BAD, ids=[b[0] for b in BAD])
+def test_bad_spec_names_field_and_line(label: str, text: str, path: str, line: int) -> None:
+    with pytest.raises(SpecError) as info:
+        parse_task(text)
+    assert info.value.path == path, str(info.value)
+    assert info.value.line == line, str(info.value)
+
+
+def test_coupled_constraint_units() -> None:
+    text = GOOD.replace("rz: 5 deg", "rz: 5 deg\n      constraints:\n"
+                        "        - {terms: {x: 1, rz: 2 cm/deg}, max: 0.5 cm}")
+    unc = parse_task(text).frames[0].uncertainty
+    assert unc is not None
+    (c,) = unc.constraints
+    # 2 cm per degree = 0.02 m / (π/180 rad) on the rotation parameter, in SI.
+    assert c.terms["rz"] == pytest.approx(0.02 / math.radians(1))
+    assert c.max == pytest.approx(0.005)
+
+
+def test_cli_bad_input_exits_2_without_traceback(tmp_path: pytest.TempPathFactory, capsys: pytest.CaptureFixture[str]) -> None:
+    task = tmp_path / "t.yaml"  # type: ignore[operator]
+    task.write_text(GOOD.replace("x: 0.3 in", "x: 0.3"))
+    assert main(["errors", str(task), "--from", "box", "--to", "hole"]) == 2
+    err = capsys.readouterr().err
+    assert "frames[0].uncertainty.x (line 7)" in err and "Traceback" not in err
+    task.write_text(GOOD)
+    assert main(["errors", str(task), "--from", "box", "--to", "nothing"]) == 2
+    assert "unknown frame or feature 'nothing'" in capsys.readouterr().err
+    assert main(["errors", str(tmp_path / "missing.yaml"), "--from", "a", "--to", "b"]) == 2  # type: ignore[operator]
+    task.write_text("name: [unclosed")
+    assert main(["errors", str(task), "--from", "a", "--to", "b"]) == 2
+    assert "YAML syntax error" in capsys.readouterr().err
+
+
+def test_cli_json_shape() -> None:
+    out = subprocess.run(
+        [sys.executable, "-m", "synth.cli", "errors", "fixtures/tasks/screw_on_driver.yaml",
+         "--from", "hole", "--to", "tip", "--json"],
+        capture_output=True, text=True, check=True,
+    )
+    import json
+
+    data = json.loads(out.stdout)
+    for part in ("first_order", "certified"):
+        assert set(data[part]) == {"dx", "dy", "dz", "dtheta_x", "dtheta_y", "dtheta_z", "tilt"}
+    assert data["first_order"]["dz"][1] == pytest.approx(0.00127, rel=0.01)
+    assert data["certified"]["dz"][1] > data["first_order"]["dz"][1]
