@@ -48,8 +48,13 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("errors", help="bound the run-time error of one frame relative to another")
     p.add_argument("task", help="task specification (YAML)")
-    p.add_argument("--from", dest="from_", required=True, metavar="A",
-                   help="reference frame: a frame name or its AL name (e.g. BH1)")
+    p.add_argument(
+        "--from",
+        dest="from_",
+        required=True,
+        metavar="A",
+        help="reference frame: a frame name or its AL name (e.g. BH1)",
+    )
     p.add_argument("--to", required=True, metavar="B", help="frame whose error is bounded")
     p.add_argument("--json", action="store_true", help="print JSON (SI units)")
     p.set_defaults(func=_cmd_errors)
@@ -72,8 +77,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except Exception as exc:
         if os.environ.get("SYNTH_DEBUG"):
             raise
-        print(f"synth {args.command}: internal error: {type(exc).__name__}: {exc} "
-              "(set SYNTH_DEBUG=1 for a traceback)", file=sys.stderr)
+        print(
+            f"synth {args.command}: internal error: {type(exc).__name__}: {exc} "
+            "(set SYNTH_DEBUG=1 for a traceback)",
+            file=sys.stderr,
+        )
         return EXIT_INTERNAL
 
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import math
 from functools import cache
-from typing import Literal
+from typing import Any, Literal
 
 import pint
 
@@ -29,7 +29,7 @@ _SI_UNIT: dict[Dimension, str] = {
 @cache
 def registry() -> pint.UnitRegistry:
     """The one pint registry; ``oz`` is read as ounce-force when a force is expected."""
-    ureg = pint.UnitRegistry(autoconvert_offset_to_baseunit=True)
+    ureg: pint.UnitRegistry = pint.UnitRegistry(autoconvert_offset_to_baseunit=True)
     return ureg
 
 
@@ -58,12 +58,14 @@ def parse_quantity(text: object, dim: Dimension) -> float:
             if not math.isfinite(value):
                 raise UnitError(f"{text!r} is not a finite number")
             return value
-        raise UnitError(f"{text!r} has no unit; write it with a unit of {dim}, e.g. '{text} {_example(dim)}'")
+        raise UnitError(
+            f"{text!r} has no unit; write it with a unit of {dim}, e.g. '{text} {_example(dim)}'"
+        )
     if not isinstance(text, str):
         raise UnitError(f"expected a quantity string like '3.85 cm', got {type(text).__name__}")
     ureg = registry()
     try:
-        q = ureg.Quantity(text.strip())
+        q: Any = ureg.Quantity(text.strip())
     except Exception as exc:  # pint raises several unrelated types for bad text
         raise UnitError(f"cannot read {text!r} as a quantity: {exc}") from None
     if not isinstance(q, pint.Quantity):
@@ -72,7 +74,10 @@ def parse_quantity(text: object, dim: Dimension) -> float:
     if not math.isfinite(magnitude):
         raise UnitError(f"{text!r} is not a finite number")
     if q.unitless and dim != "dimensionless":
-        raise UnitError(f"{text!r} has no unit; write it with a unit of {dim}, e.g. '{text.strip()} {_example(dim)}'")
+        raise UnitError(
+            f"{text!r} has no unit; write it with a unit of {dim}, "
+            f"e.g. '{text.strip()} {_example(dim)}'"
+        )
     if dim == "force" and q.dimensionality == ureg.kilogram.dimensionality:
         q = q * ureg.standard_gravity
     target = _dimensionality(dim)
@@ -84,12 +89,19 @@ def parse_quantity(text: object, dim: Dimension) -> float:
 
 
 def _example(dim: Dimension) -> str:
-    return {"length": "cm", "angle": "deg", "force": "N", "mass": "kg", "time": "s",
-            "torque": "N*m", "dimensionless": ""}[dim]
+    return {
+        "length": "cm",
+        "angle": "deg",
+        "force": "N",
+        "mass": "kg",
+        "time": "s",
+        "torque": "N*m",
+        "dimensionless": "",
+    }[dim]
 
 
 def format_quantity(value_si: float, dim: Dimension, unit: str, digits: int = 3) -> str:
-    """Format an SI value in ``unit`` with ``digits`` significant digits: ``0.0127 m → '1.27 cm'``."""
+    """Format an SI value in ``unit`` to ``digits`` significant digits (0.0127 m → '1.27 cm')."""
     ureg = registry()
     base = ureg.Quantity(value_si, _SI_UNIT[dim] or "dimensionless")
     converted = base.to(unit).magnitude

@@ -59,7 +59,9 @@ def test_coupled_constraints_use_the_lp_and_stay_certified() -> None:
     assert np.all(chain.space.feasible(v))
     _, pos = chain.evaluate(v)
     dp = pos - chain.nominal.translation
-    assert (dp @ [1.0, 1.0, 0.0]).max() <= lp.hi + np.abs([1.0, 1.0, 0.0]) @ rel.displacement.remainder
+    assert (dp @ [1.0, 1.0, 0.0]).max() <= lp.hi + np.abs(
+        [1.0, 1.0, 0.0]
+    ) @ rel.displacement.remainder
     for k, key in enumerate(("dx", "dy", "dz")):
         iv = getattr(report.certified, key)
         assert iv.lo <= dp[:, k].min() and dp[:, k].max() <= iv.hi
@@ -88,8 +90,14 @@ def _random_chain(seed: int, scale: float) -> ErrorChain:
         tol_t = scale * rng.uniform(0.001, 0.02)
         tol_r = scale * rng.uniform(0.001, 0.2)
         unc = Uncertainty.model_validate(
-            {"x": f"{tol_t} m", "y": f"{tol_t / 2} m", "z": f"{tol_t} m",
-             "rx": f"{tol_r} rad", "ry": f"{tol_r / 3} rad", "rz": f"{tol_r} rad"}
+            {
+                "x": f"{tol_t} m",
+                "y": f"{tol_t / 2} m",
+                "z": f"{tol_t} m",
+                "rx": f"{tol_r} rad",
+                "ry": f"{tol_r / 3} rad",
+                "rz": f"{tol_r} rad",
+            }
         )
         blocks.append(ParameterBlock.from_uncertainty(f"b{i}", unc))
         terms.append(Fixed(pin.SE3(pin.exp3(rng.normal(size=3)), rng.normal(scale=0.3, size=3))))
@@ -121,10 +129,12 @@ def test_certified_bounds_contain_random_chains(seed: int, scale: float) -> None
 def test_bounds_grow_with_tolerance(t1: float, t2: float, r1: float) -> None:
     small, large = sorted((t1, t2))
 
-    def report(tol: float):  # noqa: ANN202
+    def report(tol: float):
         text = COUPLED.replace("x: 0.3 in\n      y: 0.3 in", f"x: {tol} in\n      y: {tol} in")
         text = text.replace("rz: 5 deg", f"rz: {r1} deg").split("      constraints:")[0]
-        text += "  - {name: hole, al_name: BH1, parent: box, pose: {translation: [3 cm, 3 cm, 4 cm]}}\n"
+        text += (
+            "  - {name: hole, al_name: BH1, parent: box, pose: {translation: [3 cm, 3 cm, 4 cm]}}\n"
+        )
         graph = AttributeGraph(parse_task(text))
         return estimate_errors(chain_between(graph, "world", "hole"))
 
@@ -137,10 +147,18 @@ def test_bounds_grow_with_tolerance(t1: float, t2: float, r1: float) -> None:
 def test_taylor_product_remainder_is_rigorous() -> None:
     """rot(x̂,a)·rot(ŷ,b)·rot(ẑ,c): exact product minus linear part stays inside the bound."""
     m = np.array([0.3, 0.2, 0.25])
-    tm = TaylorModel.rotation(0, 0, m) @ TaylorModel.rotation(1, 1, m) @ TaylorModel.rotation(2, 2, m)
+    tm = (
+        TaylorModel.rotation(0, 0, m)
+        @ TaylorModel.rotation(1, 1, m)
+        @ TaylorModel.rotation(2, 2, m)
+    )
     rng = np.random.default_rng(0)
     for v in rng.uniform(-m, m, size=(2000, 3)):
-        exact = pin.exp3(np.array([v[0], 0, 0])) @ pin.exp3(np.array([0, v[1], 0])) @ pin.exp3(np.array([0, 0, v[2]]))
+        exact = (
+            pin.exp3(np.array([v[0], 0, 0]))
+            @ pin.exp3(np.array([0, v[1], 0]))
+            @ pin.exp3(np.array([0, 0, v[2]]))
+        )
         linear = tm.value + np.tensordot(v, tm.linear, axes=1)
         assert np.all(np.abs(exact - linear) <= tm.remainder + 1e-15)
     assert tm.remainder.max() < 0.5 * m.sum() ** 2  # second order, not a vacuous bound

@@ -74,7 +74,9 @@ def test_first_order_model_is_the_jacobian(screw: tuple[AttributeGraph, ErrorCha
     np.testing.assert_allclose(dr, rel.rotation_error.linear, atol=1e-7)
 
 
-def test_exact_chain_matches_pinocchio_composition(screw: tuple[AttributeGraph, ErrorChain]) -> None:
+def test_exact_chain_matches_pinocchio_composition(
+    screw: tuple[AttributeGraph, ErrorChain],
+) -> None:
     """The vectorised exact chain against SE3 products built one link at a time with pinocchio."""
     graph, chain = screw
     rng = np.random.default_rng(7)
@@ -99,8 +101,12 @@ def test_exact_chain_matches_pinocchio_composition(screw: tuple[AttributeGraph, 
 
     for i, row in enumerate(v):
         world_hole = perturbed("box", row) * graph.links["hole"].parent_from_child
-        world_tip = (perturbed("hand", row) * graph.links["driver"].parent_from_child
-                     * perturbed("screw", row) * graph.links["tip"].parent_from_child)
+        world_tip = (
+            perturbed("hand", row)
+            * graph.links["driver"].parent_from_child
+            * perturbed("screw", row)
+            * graph.links["tip"].parent_from_child
+        )
         rel = world_hole.inverse() * world_tip
         np.testing.assert_allclose(rot[i], rel.rotation, atol=1e-12)
         np.testing.assert_allclose(pos[i], rel.translation, atol=1e-12)
@@ -118,7 +124,9 @@ def test_lp_and_closed_form_agree(screw: tuple[AttributeGraph, ErrorChain]) -> N
         assert lp.hi == pytest.approx(closed.hi, abs=1e-12)
 
 
-def test_certified_bounds_hold_where_first_order_fails(screw: tuple[AttributeGraph, ErrorChain]) -> None:
+def test_certified_bounds_hold_where_first_order_fails(
+    screw: tuple[AttributeGraph, ErrorChain],
+) -> None:
     """≥ 100 000 samples plus all 2¹¹ box corners through the exact nonlinear chain (A.2)."""
     _, chain = screw
     report = estimate_errors(chain, "hole", "tip")
@@ -173,7 +181,9 @@ def test_footprint_table_of_4_5_3(approach: tuple[AttributeGraph, ErrorChain]) -
     assert np.roll(first, -3)[(k + 3) % 6] == pytest.approx(1.15 * CM, rel=0.03)
 
 
-def test_certified_footprint_holds_by_monte_carlo(approach: tuple[AttributeGraph, ErrorChain]) -> None:
+def test_certified_footprint_holds_by_monte_carlo(
+    approach: tuple[AttributeGraph, ErrorChain],
+) -> None:
     _, chain = approach
     _, certified = RelationModel.of(chain).footprint_table()
     rng = np.random.default_rng(11)
@@ -187,8 +197,11 @@ def test_certified_footprint_holds_by_monte_carlo(approach: tuple[AttributeGraph
 
 
 def test_fixed_chain_has_no_error() -> None:
-    chain = ErrorChain(space=chain_between(
-        AttributeGraph(load_task(f"{FIXTURES}/seed_4_8.yaml")), "rack", "pin1").space,
-        terms=(Fixed(pin.SE3.Identity()),))
+    chain = ErrorChain(
+        space=chain_between(
+            AttributeGraph(load_task(f"{FIXTURES}/seed_4_8.yaml")), "rack", "pin1"
+        ).space,
+        terms=(Fixed(pin.SE3.Identity()),),
+    )
     report = estimate_errors(chain)
     assert report.certified.dx.hi == 0.0 and report.certified.tilt == 0.0

@@ -6,6 +6,7 @@ import math
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 import pytest
 
@@ -95,14 +96,29 @@ BAD = [
     ("bad AL name", GOOD.replace("al_name: BOX", "al_name: 2BOX"), "frames[0].al_name", 4),
     ("duplicate AL name", GOOD.replace("al_name: BH1", "al_name: box"), "frames[1].al_name", 10),
     ("unknown field", GOOD.replace("name: t", "name: t\nfoo: 1"), "foo", 2),
-    ("cycle", GOOD.replace("    al_name: BOX\n", "    al_name: BOX\n    parent: hole\n"),
-     "frames[0].parent", 5),
-    ("infeasible", GOOD.replace("rz: 5 deg", "rz: 5 deg\n      constraints:\n"
-                                "        - {terms: {x: 1}, min: 1 in}"),
-     "frames[0].uncertainty.constraints", 9),
-    ("bad coefficient kind", GOOD.replace("rz: 5 deg", "rz: 5 deg\n      constraints:\n"
-                                          "        - {terms: {x: 1, rz: 1}, max: 1 in}"),
-     "frames[0].uncertainty.constraints[0]", 10),
+    (
+        "cycle",
+        GOOD.replace("    al_name: BOX\n", "    al_name: BOX\n    parent: hole\n"),
+        "frames[0].parent",
+        5,
+    ),
+    (
+        "infeasible",
+        GOOD.replace(
+            "rz: 5 deg", "rz: 5 deg\n      constraints:\n        - {terms: {x: 1}, min: 1 in}"
+        ),
+        "frames[0].uncertainty.constraints",
+        9,
+    ),
+    (
+        "bad coefficient kind",
+        GOOD.replace(
+            "rz: 5 deg",
+            "rz: 5 deg\n      constraints:\n        - {terms: {x: 1, rz: 1}, max: 1 in}",
+        ),
+        "frames[0].uncertainty.constraints[0]",
+        10,
+    ),
 ]
 
 
@@ -115,8 +131,10 @@ def test_bad_spec_names_field_and_line(label: str, text: str, path: str, line: i
 
 
 def test_coupled_constraint_units() -> None:
-    text = GOOD.replace("rz: 5 deg", "rz: 5 deg\n      constraints:\n"
-                        "        - {terms: {x: 1, rz: 2 cm/deg}, max: 0.5 cm}")
+    text = GOOD.replace(
+        "rz: 5 deg",
+        "rz: 5 deg\n      constraints:\n        - {terms: {x: 1, rz: 2 cm/deg}, max: 0.5 cm}",
+    )
     unc = parse_task(text).frames[0].uncertainty
     assert unc is not None
     (c,) = unc.constraints
@@ -125,8 +143,10 @@ def test_coupled_constraint_units() -> None:
     assert c.max == pytest.approx(0.005)
 
 
-def test_cli_bad_input_exits_2_without_traceback(tmp_path: pytest.TempPathFactory, capsys: pytest.CaptureFixture[str]) -> None:
-    task = tmp_path / "t.yaml"  # type: ignore[operator]
+def test_cli_bad_input_exits_2_without_traceback(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    task = tmp_path / "t.yaml"
     task.write_text(GOOD.replace("x: 0.3 in", "x: 0.3"))
     assert main(["errors", str(task), "--from", "box", "--to", "hole"]) == 2
     err = capsys.readouterr().err
@@ -134,7 +154,7 @@ def test_cli_bad_input_exits_2_without_traceback(tmp_path: pytest.TempPathFactor
     task.write_text(GOOD)
     assert main(["errors", str(task), "--from", "box", "--to", "nothing"]) == 2
     assert "unknown frame or feature 'nothing'" in capsys.readouterr().err
-    assert main(["errors", str(tmp_path / "missing.yaml"), "--from", "a", "--to", "b"]) == 2  # type: ignore[operator]
+    assert main(["errors", str(tmp_path / "missing.yaml"), "--from", "a", "--to", "b"]) == 2
     task.write_text("name: [unclosed")
     assert main(["errors", str(task), "--from", "a", "--to", "b"]) == 2
     assert "YAML syntax error" in capsys.readouterr().err
@@ -142,9 +162,21 @@ def test_cli_bad_input_exits_2_without_traceback(tmp_path: pytest.TempPathFactor
 
 def test_cli_json_shape() -> None:
     out = subprocess.run(
-        [sys.executable, "-m", "synth.cli", "errors", "fixtures/tasks/screw_on_driver.yaml",
-         "--from", "hole", "--to", "tip", "--json"],
-        capture_output=True, text=True, check=True,
+        [
+            sys.executable,
+            "-m",
+            "synth.cli",
+            "errors",
+            "fixtures/tasks/screw_on_driver.yaml",
+            "--from",
+            "hole",
+            "--to",
+            "tip",
+            "--json",
+        ],
+        capture_output=True,
+        text=True,
+        check=True,
     )
     import json
 

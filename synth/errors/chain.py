@@ -100,7 +100,9 @@ class ErrorChain:
                 p2 = np.broadcast_to(t.pose.translation, (n, 3))
             else:
                 block = self.space.blocks[t.block]
-                r2, p2 = _perturbation_exact(block, v[:, offsets[t.block]: offsets[t.block] + block.size])
+                r2, p2 = _perturbation_exact(
+                    block, v[:, offsets[t.block] : offsets[t.block] + block.size]
+                )
                 if t.inverse:
                     r2 = np.swapaxes(r2, 1, 2)
                     p2 = -np.einsum("nij,nj->ni", r2, p2)
@@ -137,7 +139,9 @@ def _perturbation_exact(block: ParameterBlock, v: np.ndarray) -> tuple[np.ndarra
 
 
 def _constant(pose: pin.SE3, m: np.ndarray) -> PoseModel:
-    return PoseModel(TaylorModel.constant(pose.rotation, m), TaylorModel.constant(pose.translation, m))
+    return PoseModel(
+        TaylorModel.constant(pose.rotation, m), TaylorModel.constant(pose.translation, m)
+    )
 
 
 def _perturbation_model(block: ParameterBlock, offset: int, m: np.ndarray) -> PoseModel:

@@ -79,8 +79,10 @@ class ErrorReport:
             "to": self.end,
             "first_order": self.first_order.to_json(),
             "certified": self.certified.to_json(),
-            "remainder": {"position": list(self.position_remainder),
-                          "rotation": list(self.rotation_remainder)},
+            "remainder": {
+                "position": list(self.position_remainder),
+                "rotation": list(self.rotation_remainder),
+            },
             "parameters": list(self.parameters),
         }
 
@@ -120,7 +122,10 @@ class RelationModel:
         return first, first.widened(float(np.abs(d) @ vee_remainder(self.rotation_error.remainder)))
 
     def tilt_directions(self, count: int = TILT_DIRECTIONS) -> np.ndarray:
-        """Unit vectors ``cos ζ e₁ + sin ζ e₂`` ⟂ a₀, ζ = i·180°/count; e₁, e₂ = x̂, ŷ when a₀ ∥ ẑ."""
+        """Unit vectors ``cos ζ e₁ + sin ζ e₂`` ⟂ a₀, ζ = i·180°/count.
+
+        ``e₁, e₂ = x̂, ŷ`` of the ``from`` frame when a₀ ∥ ẑ (the seed's case).
+        """
         a0 = self.nominal_axis
         if abs(a0[2]) > 1.0 - 1e-9:
             e1, e2 = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
@@ -149,6 +154,16 @@ class RelationModel:
             first.append(f.magnitude)
             cert.append(c.magnitude)
         return np.array(first), np.array(cert)
+
+
+def _bounds(p: list[Interval], t: list[Interval], tilt: float) -> ErrorBounds:
+    return ErrorBounds(
+        dx=p[0], dy=p[1], dz=p[2], dtheta_x=t[0], dtheta_y=t[1], dtheta_z=t[2], tilt=tilt
+    )
+
+
+def _triple(x: np.ndarray) -> tuple[float, float, float]:
+    return (float(x[0]), float(x[1]), float(x[2]))
 
 
 def vee_remainder(b: np.ndarray) -> np.ndarray:
@@ -184,9 +199,14 @@ def estimate_errors(chain: ErrorChain, start: str = "from", end: str = "to") -> 
     tilt_first, tilt_cert = rel.tilt_table()
     half_spacing = math.pi / (2 * TILT_DIRECTIONS)
     tilt_certified = math.asin(min(1.0, float(tilt_cert.max()) / math.cos(half_spacing)))
-    first = ErrorBounds(*first_p, *first_t, tilt=float(tilt_first.max()))
-    certified = ErrorBounds(*cert_p, *cert_t, tilt=tilt_certified)
-    return ErrorReport(start, end, first, certified,
-                       tuple(float(x) for x in rel.displacement.remainder),
-                       tuple(float(x) for x in vee_remainder(rel.rotation_error.remainder)),
-                       chain.space.labels)
+    first = _bounds(first_p, first_t, float(tilt_first.max()))
+    certified = _bounds(cert_p, cert_t, tilt_certified)
+    return ErrorReport(
+        start,
+        end,
+        first,
+        certified,
+        _triple(rel.displacement.remainder),
+        _triple(vee_remainder(rel.rotation_error.remainder)),
+        chain.space.labels,
+    )

@@ -3,7 +3,8 @@
 Seed Eqn 3.5.1 (L2205): errors are linear in free variables v subject to ``c_j(v) ≤ b_j``. Each
 uncertain link contributes one block (its bounded x, y, z, rx, ry, rz); blocks are stacked into
 one vector ``v`` with bounds ``lo ≤ v ≤ hi`` and coupled constraints ``A v ≤ b``. The planner
-adds constraints across blocks (a tap measurement, seed §4.5.2) with :meth:`ParameterSpace.constrain`.
+adds constraints across blocks (a tap measurement, seed §4.5.2) with
+:meth:`ParameterSpace.constrain`.
 """
 
 from __future__ import annotations
@@ -145,7 +146,7 @@ class ParameterSpace:
         raise KeyError(owner)
 
     def feasible(self, v: np.ndarray, tol: float = 1e-12) -> np.ndarray:
-        """Boolean mask of the rows of ``v`` (shape (N, dim)) that satisfy bounds and constraints."""
+        """Mask of the rows of ``v`` (shape (N, dim)) that satisfy bounds and constraints."""
         v = np.atleast_2d(v)
         ok = np.all((v >= self.lo - tol) & (v <= self.hi + tol), axis=1)
         a, b = self.constraint_matrix()
@@ -167,8 +168,13 @@ class ParameterSpace:
                 if b.distribution == "normal":
                     sigma = np.maximum(np.maximum(np.abs(b.lo), np.abs(b.hi)) / 3.0, 1e-300)
                     parts.append(
-                        truncnorm.rvs(b.lo / sigma, b.hi / sigma, scale=sigma,
-                                      size=(want, b.size), random_state=rng)
+                        truncnorm.rvs(
+                            b.lo / sigma,
+                            b.hi / sigma,
+                            scale=sigma,
+                            size=(want, b.size),
+                            random_state=rng,
+                        )
                     )
                 else:
                     parts.append(rng.uniform(b.lo, b.hi, size=(want, b.size)))

@@ -48,7 +48,7 @@ def rotation_remainder(axis: int, a: float) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class TaylorModel:
-    """``X(v) = value + Σ v_i linear[i] + Q`` with ``|Q| ≤ remainder`` entrywise on ``|v| ≤ magnitude``."""
+    """``X(v) = value + Σ v_i linear[i] + Q``; ``|Q| ≤ remainder`` entrywise for ``|v| ≤ m``."""
 
     value: np.ndarray
     linear: np.ndarray
@@ -59,8 +59,9 @@ class TaylorModel:
     def constant(cls, value: np.ndarray, magnitude: np.ndarray) -> TaylorModel:
         """An exactly known matrix or vector."""
         value = np.array(value, dtype=float)
-        return cls(value, np.zeros((len(magnitude), *value.shape)), np.zeros(value.shape),
-                   magnitude)
+        return cls(
+            value, np.zeros((len(magnitude), *value.shape)), np.zeros(value.shape), magnitude
+        )
 
     @classmethod
     def translation(cls, axis: int, index: int, magnitude: np.ndarray) -> TaylorModel:
@@ -94,17 +95,22 @@ class TaylorModel:
         return TaylorModel(a0 @ b0, lin, rem, self.magnitude)
 
     def __add__(self, other: TaylorModel) -> TaylorModel:
-        return TaylorModel(self.value + other.value, self.linear + other.linear,
-                           self.remainder + other.remainder, self.magnitude)
+        return TaylorModel(
+            self.value + other.value,
+            self.linear + other.linear,
+            self.remainder + other.remainder,
+            self.magnitude,
+        )
 
     def __neg__(self) -> TaylorModel:
         return TaylorModel(-self.value, -self.linear, self.remainder, self.magnitude)
 
     @property
-    def T(self) -> TaylorModel:  # noqa: N802 - mirrors numpy's transpose
+    def T(self) -> TaylorModel:
         """Transpose."""
-        return TaylorModel(self.value.T, np.swapaxes(self.linear, 1, 2), self.remainder.T,
-                           self.magnitude)
+        return TaylorModel(
+            self.value.T, np.swapaxes(self.linear, 1, 2), self.remainder.T, self.magnitude
+        )
 
 
 def skew(w: np.ndarray) -> np.ndarray:
@@ -127,8 +133,9 @@ class PoseModel:
 
     def __mul__(self, other: PoseModel) -> PoseModel:
         """``(R₁, p₁)(R₂, p₂) = (R₁R₂, R₁p₂ + p₁)``."""
-        return PoseModel(self.rotation @ other.rotation,
-                         self.rotation @ other.translation + self.translation)
+        return PoseModel(
+            self.rotation @ other.rotation, self.rotation @ other.translation + self.translation
+        )
 
     def inverse(self) -> PoseModel:
         """``(R, p)⁻¹ = (Rᵀ, −Rᵀp)``."""

@@ -19,7 +19,11 @@ import pinocchio as pin
 from synth.exceptions import FrameLookupError
 from synth.models.spec import WORLD, FrameSpec, Pose, Shape, TaskSpec, Uncertainty
 
-_AXES = {"x": np.array([1.0, 0.0, 0.0]), "y": np.array([0.0, 1.0, 0.0]), "z": np.array([0.0, 0.0, 1.0])}
+_AXES = {
+    "x": np.array([1.0, 0.0, 0.0]),
+    "y": np.array([0.0, 1.0, 0.0]),
+    "z": np.array([0.0, 0.0, 1.0]),
+}
 
 
 def pose_to_se3(pose: Pose) -> pin.SE3:
@@ -142,8 +146,11 @@ class AttributeGraph:
     def holes_in(self, surface: str) -> list[Node]:
         """Hole features drilled into ``surface``."""
         s = self.resolve(surface)
-        return [n for n in self.features("hole") if n.shape is not None
-                and n.shape.type == "hole" and n.shape.surface == s]
+        return [
+            n
+            for n in self.features("hole")
+            if n.shape is not None and n.shape.type == "hole" and n.shape.surface == s
+        ]
 
     def owner(self, name: str) -> str:
         """The nearest ancestor (or self) that is an object (box or pin), else ``world``."""

@@ -138,19 +138,20 @@ def _check_feasible(unc: Uncertainty, loc: PathKey, fail: Any) -> None:
         if c.min is not None:
             rows.append(-row)
             rhs.append(-c.min)
-    res = linprog(np.zeros(len(names)), A_ub=np.array(rows), b_ub=np.array(rhs), bounds=bounds,
-                  method="highs")
+    res = linprog(
+        np.zeros(len(names)), A_ub=np.array(rows), b_ub=np.array(rhs), bounds=bounds, method="highs"
+    )
     if res.status == 2:
         fail((*loc, "constraints"), "the constraints and bounds admit no error values (infeasible)")
     if res.status != 0:
         fail((*loc, "constraints"), f"could not check the constraints: {res.message}")
 
 
-def _message(err: dict[str, Any]) -> str:
+def _message(err: Any) -> str:
     msg = str(err.get("msg", "invalid value"))
     for prefix in ("Value error, ", "Assertion failed, "):
         if msg.startswith(prefix):
-            msg = msg[len(prefix):]
+            msg = msg[len(prefix) :]
     if err.get("type") == "missing":
         return "this field is required"
     if err.get("type") == "extra_forbidden":
@@ -164,7 +165,12 @@ def _strip_union_tags(loc: tuple[Any, ...]) -> PathKey:
     # field the user wrote.
     out: list[str | int] = []
     for part in loc:
-        if isinstance(part, str) and ("[" in part or part in ("box", "pin", "hole", "surface")) and out and out[-1] == "shape":
+        if (
+            isinstance(part, str)
+            and ("[" in part or part in ("box", "pin", "hole", "surface"))
+            and out
+            and out[-1] == "shape"
+        ):
             continue
         if isinstance(part, str) and part.startswith("function-"):
             continue

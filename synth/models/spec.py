@@ -144,16 +144,20 @@ class LinearConstraint(_Model):
             raise ValueError("a constraint is a mapping with 'terms' and 'min' and/or 'max'")
         raw_terms = data.get("terms")
         if not isinstance(raw_terms, dict) or not raw_terms:
-            raise ValueError("'terms' must map error parameters (x, y, z, rx, ry, rz) to coefficients")
+            raise ValueError(
+                "'terms' must map error parameters (x, y, z, rx, ry, rz) to coefficients"
+            )
         if data.get("min") is None and data.get("max") is None:
             raise ValueError("a constraint needs 'min', 'max' or both")
         kind = _constraint_kind(data)
         terms: dict[str, float] = {}
         for param, coefficient in raw_terms.items():
             if param not in PARAMS:
-                raise ValueError(f"unknown error parameter {param!r}; use one of {', '.join(PARAMS)}")
+                raise ValueError(
+                    f"unknown error parameter {param!r}; use one of {', '.join(PARAMS)}"
+                )
             terms[param] = _coefficient_si(param, coefficient, kind)
-        out = {"terms": terms, "kind": kind}
+        out: dict[str, Any] = {"terms": terms, "kind": kind}
         for key in ("min", "max"):
             if data.get(key) is not None:
                 out[key] = parse_quantity(data[key], kind)
@@ -173,7 +177,7 @@ def _constraint_kind(data: dict[str, Any]) -> Literal["length", "angle"]:
     bound = data.get("max") if data.get("max") is not None else data.get("min")
     ureg = registry()
     try:
-        q = ureg.Quantity(str(bound))
+        q: Any = ureg.Quantity(str(bound))
     except Exception:
         raise ValueError(f"cannot read constraint bound {bound!r} as a quantity") from None
     if q.unitless:
@@ -202,7 +206,7 @@ def _coefficient_si(param: str, coefficient: Any, kind: Literal["length", "angle
             )
         return value
     try:
-        q = ureg.Quantity(str(coefficient))
+        q: Any = ureg.Quantity(str(coefficient))
     except Exception:
         raise ValueError(f"cannot read coefficient {coefficient!r} of {param}") from None
     value = float(q.to_base_units().magnitude)
@@ -215,7 +219,9 @@ def _coefficient_si(param: str, coefficient: Any, kind: Literal["length", "angle
         return float(q.to("m/rad").magnitude)
     if param_kind == "length" and kind == "angle" and q.dimensionality == 1 / length_dim:
         return float(q.to("rad/m").magnitude)
-    raise ValueError(f"coefficient {coefficient!r} of {param} does not turn a {param_kind} into a {kind}")
+    raise ValueError(
+        f"coefficient {coefficient!r} of {param} does not turn a {param_kind} into a {kind}"
+    )
 
 
 class Uncertainty(_Model):
@@ -267,7 +273,9 @@ class PinShape(_Model):
     diameter: PositiveLength
     tip_taper_length: NonNegativeLength
     tip_radius: NonNegativeLength
-    mass: Annotated[float, BeforeValidator(lambda v: parse_quantity(v, "mass")), Field(ge=0)] | None = None
+    mass: (
+        Annotated[float, BeforeValidator(lambda v: parse_quantity(v, "mass")), Field(ge=0)] | None
+    ) = None
 
     @model_validator(mode="after")
     def _consistent(self) -> PinShape:
