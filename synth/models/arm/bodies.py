@@ -1,0 +1,82 @@
+"""Collision bodies: a Coal geometry rigidly attached to a joint of the kinematic model.
+
+A :class:`Body` is what becomes one Pinocchio ``GeometryObject``: a name, the joint that carries
+it (0 = the fixed world/base), the frame it belongs to (a link name, used by SRDF pair rules),
+its pose in the joint frame and a Coal shape. The helpers build the primitives the Stanford arm
+and the generic hand are made of; sizes are full lengths in [m].
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import coal
+import numpy as np
+import pinocchio as pin
+
+Role = Literal["arm", "hand", "held", "environment"]
+
+
+@dataclass(frozen=True, eq=False)
+class Body:
+    """A collision shape carried by a joint.
+
+    ``placement`` is T_joint_body (pose of the shape's own frame in the joint frame); ``link``
+    names the link (or environment object) the body belongs to; ``role`` groups bodies for
+    pair rules (arm links, the hand, a held object, the environment).
+    """
+
+    name: str
+    joint: int
+    link: str
+    placement: pin.SE3
+    geometry: coal.CollisionGeometry
+    role: Role = "arm"
+
+    def geometry_object(self, model: pin.Model) -> pin.GeometryObject:
+        """Make the Pinocchio geometry object (parent frame looked up by link name)."""
+        frame = model.getFrameId(self.link) if model.existFrame(self.link) else 0
+        frame = frame if frame < len(model.frames) else 0
+        return pin.GeometryObject(self.name, self.joint, frame, self.placement, self.geometry)
+
+
+_AXIS_ROTATION: dict[str, np.ndarray] = {
+    "z": np.eye(3),
+    # Coal cylinders and capsules lie along their local z; rotate z onto x or y.
+    "x": pin.utils.rotate("y", np.pi / 2),
+    "y": pin.utils.rotate("x", -np.pi / 2),
+}
+
+
+def cylinder_along(
+    radius: float, start: float, end: float, axis: Literal["x", "y", "z"] = "z"
+) -> tuple[coal.Cylinder, pin.SE3]:
+    """Make a cylinder of ``radius`` [m] spanning ``start ≤ s ≤ end`` [m] along a frame axis.
+
+    Returns the Coal shape and its placement in that frame (Coal cylinders are centred on
+    their origin along local z).
+    """
+    if end <= start:
+        raise ValueError(f"cylinder end {end} must exceed start {start}")
+    direction = {"x": np.array([1.0, 0, 0]), "y": np.array([0, 1.0, 0]), "z": np.array([0, 0, 1.0])}
+    centre = direction[axis] * (start + end) / 2
+    return coal.Cylinder(radius, end - start), pin.SE3(_AXIS_ROTATION[axis], centre)
+
+
+def box_at(
+    size: tuple[float, float, float], centre: tuple[float, float, float]
+) -> tuple[coal.Box, pin.SE3]:
+    """Make an axis-aligned box of full side lengths ``size`` [m] centred at ``centre`` [m]."""
+    return coal.Box(*size), pin.SE3(np.eye(3), np.array(centre, dtype=float))
+
+
+def bounding_radius(geometry: coal.CollisionGeometry, placement: pin.SE3) -> float:
+    """Radius [m] of a ball about the joint-frame origin that contains the placed shape.
+
+    r = |t + R·c| + ρ, with (c, ρ) the centre and radius of the ball around the shape's local
+    axis-aligned bounding box (Coal's ``aabb_center``, ``aabb_radius``).
+    """
+    geometry.computeLocalAABB()
+    centre = placement.translation + placement.rotation @ np.asarray(geometry.aabb_center)
+    return float(np.linalg.norm(centre) + geometry.aabb_radius)
