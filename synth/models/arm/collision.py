@@ -1,0 +1,304 @@
+"""Collision scene: the arm, its hand, a held object and the environment in one Coal model.
+
+A :class:`CollisionScene` is a Pinocchio ``GeometryModel`` over the arm's kinematic model with
+these bodies: the arm links, the palm and fingers (at a given opening), optionally one held
+object rigidly attached to the hand, and the environment as a list of named Coal geometries
+(or trimesh meshes) at fixed world poses. Which body pairs are checked:
+
+=================  ===================================  ============  ==============
+                   arm link / hand                      held object   environment
+=================  ===================================  ============  ==============
+arm link / hand    unless adjacent or SRDF-disabled     yes           yes
+held object                                             —             yes
+environment                                                           never
+=================  ===================================  ============  ==============
+
+*Adjacent* means carried by the same joint or by a joint and its parent: such links touch by
+construction (a joint's two sides), so checking them would only give false positives. Pairs of
+bodies that are both fixed (the arm's base column and the table, say) can never change and are
+not checked. *Allowed contacts* are declared explicitly by name — the fingers on the grasped
+pin, the pin in its hole — and remove exactly those pairs; nothing else is exempt.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from typing import Any, Literal, TypeAlias, cast
+
+import coal
+import numpy as np
+import pinocchio as pin
+import trimesh
+from numpy.typing import ArrayLike, NDArray
+
+from synth.exceptions import ArmModelError
+from synth.models.arm.arm import Arm
+from synth.models.arm.bodies import Body
+from synth.models.arm.hand import FINGERS, finger_placement
+from synth.models.arm.sweep import body_motion_bounds, pair_motion_bounds
+
+Geometry: TypeAlias = "coal.CollisionGeometry | trimesh.Trimesh"
+
+
+def coal_geometry(geometry: Geometry) -> coal.CollisionGeometry:
+    """Convert to a Coal geometry; a trimesh mesh becomes a ``BVHModelOBBRSS`` ([m])."""
+    if isinstance(geometry, coal.CollisionGeometry):
+        return geometry
+    if isinstance(geometry, trimesh.Trimesh):
+        bvh = coal.BVHModelOBBRSS()
+        vertices = np.asarray(geometry.vertices, dtype=np.float64)
+        faces = np.asarray(geometry.faces, dtype=np.int64)
+        bvh.beginModel(len(faces), len(vertices))
+        bvh.addVertices(vertices)
+        bvh.addTriangles(faces)
+        bvh.endModel()
+        return bvh
+    raise ArmModelError(
+        f"unsupported geometry type {type(geometry).__name__} (Coal shape or trimesh)"
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class Obstacle:
+    """A named environment body at a fixed world pose T_world_obstacle."""
+
+    name: str
+    geometry: coal.CollisionGeometry
+    pose: pin.SE3
+
+    @staticmethod
+    def of(name: str, geometry: Geometry, pose: pin.SE3) -> Obstacle:
+        """Make an obstacle from a Coal shape or trimesh mesh."""
+        return Obstacle(name, coal_geometry(geometry), pose.copy())
+
+
+@dataclass(frozen=True, eq=False)
+class HeldObject:
+    """An object held by the hand at T_hand_object (e.g. the pin, seed L2000 grasp frame)."""
+
+    name: str
+    geometry: coal.CollisionGeometry
+    transform_hand_object: pin.SE3
+
+    @staticmethod
+    def of(name: str, geometry: Geometry, transform_hand_object: pin.SE3) -> HeldObject:
+        """Make a held object from a Coal shape or trimesh mesh."""
+        return HeldObject(name, coal_geometry(geometry), transform_hand_object.copy())
+
+
+EnvironmentItem = Obstacle | tuple[str, Geometry, pin.SE3]
+Pair = tuple[str, str]
+
+
+def grasp_contacts(held: str) -> frozenset[frozenset[str]]:
+    """Return the allowed contacts of a grasp: both fingers on the held object."""
+    return frozenset(frozenset((finger, held)) for finger in FINGERS)
+
+
+def _pair(a: str, b: str) -> frozenset[str]:
+    return frozenset((a, b))
+
+
+@dataclass(frozen=True)
+class Clearance:
+    """Smallest distance [m] over the checked pairs (≤ 0: in contact) and the pair realising it."""
+
+    distance: float
+    pair: Pair | None
+
+
+class CollisionScene:
+    """Arm + hand + held object + environment, with the checked pair set fixed at construction.
+
+    ``opening`` [m] places the fingers (default: fully open). ``allowed`` lists name pairs that
+    may touch. The scene caches Pinocchio/Coal data, so it is not thread-safe; build one per
+    thread. Build a new scene (:meth:`with_held`, :meth:`with_opening`) when the grasp changes.
+    """
+
+    def __init__(
+        self,
+        arm: Arm,
+        environment: Iterable[EnvironmentItem] = (),
+        *,
+        held: HeldObject | None = None,
+        allowed: Iterable[Iterable[str]] = (),
+        opening: float | None = None,
+    ) -> None:
+        self.arm = arm
+        self.opening = arm.hand.max_opening if opening is None else float(opening)
+        if not 0.0 <= self.opening <= arm.hand.max_opening + 1e-12:
+            raise ArmModelError(
+                f"finger opening {self.opening} m outside [0, {arm.hand.max_opening}] m"
+            )
+        self.environment: tuple[Obstacle, ...] = tuple(
+            item if isinstance(item, Obstacle) else Obstacle.of(*item) for item in environment
+        )
+        self.held = held
+        self.bodies: tuple[Body, ...] = tuple(self._bodies())
+        names = [b.name for b in self.bodies]
+        clashes = sorted({n for n in names if names.count(n) > 1})
+        if clashes:
+            raise ArmModelError(f"geometry names used twice: {', '.join(clashes)}")
+        self.allowed: frozenset[frozenset[str]] = frozenset(frozenset(p) for p in allowed)
+        for p in self.allowed:
+            if len(p) != 2 or not p <= set(names):
+                unknown = sorted(set(p) - set(names))
+                raise ArmModelError(
+                    f"allowed contact {sorted(p)} names unknown bodies {unknown}; known: {names}"
+                )
+        self.model = arm.model
+        self.data = arm.model.createData()
+        self.geometry_model = pin.GeometryModel()
+        for body in self.bodies:
+            self.geometry_model.addGeometryObject(body.geometry_object(self.model))
+        self.pairs, self.excluded = self._pairs()
+        for a, b in self.pairs:
+            self.geometry_model.addCollisionPair(
+                pin.CollisionPair(
+                    self.geometry_model.getGeometryId(a), self.geometry_model.getGeometryId(b)
+                )
+            )
+        self.geometry_data = self.geometry_model.createData()
+        index = {n: i for i, n in enumerate(names)}
+        self.body_bounds = body_motion_bounds(self.model, arm.limits, self.bodies)
+        self.pair_bounds = pair_motion_bounds(
+            self.model, self.bodies, [(index[a], index[b]) for a, b in self.pairs], self.body_bounds
+        )
+
+    def _bodies(self) -> list[Body]:
+        arm, hand = self.arm, self.arm.hand
+        hand_frame = arm.model.frames[arm.hand_frame]
+        bodies = []
+        for body in arm.bodies:
+            if body.name in FINGERS:
+                side = cast(Literal[-1, 1], -1 if body.name == FINGERS[0] else 1)
+                placement = hand_frame.placement * finger_placement(hand, side, self.opening)
+                body = Body(body.name, body.joint, body.link, placement, body.geometry, body.role)
+            bodies.append(body)
+        if self.held is not None:
+            placement = hand_frame.placement * self.held.transform_hand_object
+            bodies.append(
+                Body(
+                    self.held.name,
+                    int(hand_frame.parentJoint),
+                    self.held.name,
+                    placement,
+                    self.held.geometry,
+                    "held",
+                )
+            )
+        for obstacle in self.environment:
+            bodies.append(
+                Body(
+                    obstacle.name, 0, obstacle.name, obstacle.pose, obstacle.geometry, "environment"
+                )
+            )
+        return bodies
+
+    def _pairs(self) -> tuple[tuple[Pair, ...], dict[frozenset[str], str]]:
+        parents = self.model.parents
+        disabled = self.arm.disabled_pairs
+        pairs: list[Pair] = []
+        excluded: dict[frozenset[str], str] = {}
+        for i, a in enumerate(self.bodies):
+            for b in self.bodies[i + 1 :]:
+                key = _pair(a.name, b.name)
+                reason = None
+                if a.joint == 0 and b.joint == 0:
+                    reason = "static"
+                elif key in self.allowed:
+                    reason = "allowed"
+                elif a.role in ("arm", "hand") and b.role in ("arm", "hand"):
+                    if (
+                        a.joint == b.joint
+                        or parents[a.joint] == b.joint
+                        or parents[b.joint] == a.joint
+                    ):
+                        reason = "adjacent"
+                    elif _pair(a.link, b.link) in disabled:
+                        reason = "srdf"
+                if reason is None:
+                    pairs.append((a.name, b.name))
+                else:
+                    excluded[key] = reason
+        return tuple(pairs), excluded
+
+    def with_held(
+        self, held: HeldObject | None, allowed: Iterable[Iterable[str]] | None = None
+    ) -> CollisionScene:
+        """Rebuild the scene holding ``held`` (None: empty hand), with new allowed contacts."""
+        keep = self.allowed if allowed is None else allowed
+        return CollisionScene(
+            self.arm, self.environment, held=held, allowed=keep, opening=self.opening
+        )
+
+    def with_opening(self, opening: float) -> CollisionScene:
+        """Rebuild the scene with the fingers at ``opening`` [m]."""
+        return CollisionScene(
+            self.arm, self.environment, held=self.held, allowed=self.allowed, opening=opening
+        )
+
+    # Queries ---------------------------------------------------------------------------------
+
+    def _q(self, q: ArrayLike) -> NDArray[np.float64]:
+        qa = np.asarray(q, dtype=float)
+        if qa.shape != (self.model.nq,):
+            raise ValueError(f"configuration of size {qa.shape} for a {self.model.nq}-joint arm")
+        return qa
+
+    def in_collision(self, q: ArrayLike) -> bool:
+        """Whether any checked pair is in contact at ``q`` (stops at the first)."""
+        return bool(
+            pin.computeCollisions(
+                self.model, self.data, self.geometry_model, self.geometry_data, self._q(q), True
+            )
+        )
+
+    def collisions(self, q: ArrayLike) -> list[Pair]:
+        """Every checked pair in contact at ``q``."""
+        pin.computeCollisions(
+            self.model, self.data, self.geometry_model, self.geometry_data, self._q(q), False
+        )
+        results = self.geometry_data.collisionResults
+        return [self.pairs[k] for k in range(len(self.pairs)) if results[k].isCollision()]
+
+    def distances(self, q: ArrayLike) -> NDArray[np.float64]:
+        """Distance [m] of every checked pair at ``q``, in :attr:`pairs` order (≤ 0: contact)."""
+        pin.computeDistances(
+            self.model, self.data, self.geometry_model, self.geometry_data, self._q(q)
+        )
+        results = self.geometry_data.distanceResults
+        return np.fromiter(
+            (results[k].min_distance for k in range(len(self.pairs))), float, len(self.pairs)
+        )
+
+    def clearance(self, q: ArrayLike) -> Clearance:
+        """Return the smallest distance over the checked pairs and its pair (inf: none)."""
+        if not self.pairs:
+            return Clearance(float("inf"), None)
+        d = self.distances(q)
+        k = int(np.argmin(d))
+        return Clearance(float(d[k]), self.pairs[k])
+
+    def body_pose(self, q: ArrayLike, name: str) -> pin.SE3:
+        """World pose of a body's geometry frame at ``q``."""
+        pin.updateGeometryPlacements(
+            self.model, self.data, self.geometry_model, self.geometry_data, self._q(q)
+        )
+        return self.geometry_data.oMg[self.geometry_model.getGeometryId(name)].copy()
+
+    def describe(self) -> dict[str, Any]:
+        """List checked and excluded pairs, for reports and debugging."""
+        return {
+            "checked": [list(p) for p in self.pairs],
+            "excluded": {
+                " / ".join(sorted(k)): v
+                for k, v in sorted(self.excluded.items(), key=lambda kv: sorted(kv[0]))
+            },
+        }
+
+
+def environment_from(items: Sequence[EnvironmentItem]) -> tuple[Obstacle, ...]:
+    """Normalise (name, geometry, pose) tuples and obstacles into obstacles."""
+    return tuple(item if isinstance(item, Obstacle) else Obstacle.of(*item) for item in items)
