@@ -1,0 +1,90 @@
+"""Rating arm solutions: the seed's grasp quality and a hook for other ratings.
+
+A rating maps an arm and a configuration to a cost, lower is better. The seed grades each
+feasible grasping position by one joint (seed L2086–2100): "the angle of the 'elbow' (joint 5 of
+the Scheinman arm) is examined; angles near 45 degrees are considered best",
+
+    cost = |45° − θ5|   [rad].
+
+Other ratings plug in through the :class:`SolutionRating` protocol (footnote 11 of the seed
+suggests the error hypercube at the fingers or the time to reach the position); the joint-limit
+margin below is one such alternative.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from synth.models.arm.arm import Arm
+
+
+class SolutionRating(Protocol):
+    """Cost of reaching a pose with configuration ``q`` (lower is better)."""
+
+    def __call__(self, arm: Arm, q: NDArray[np.float64]) -> float:
+        """Return the cost of ``q``."""
+        ...
+
+
+@dataclass(frozen=True)
+class JointAngleRating:
+    """cost = |preferred − q[joint]| [rad]; the seed's rule with joint θ5 and 45° (L2096)."""
+
+    joint: int | None = None
+    """Index of the rated joint; None: the arm's ``grasp_joint`` (θ5 for the Stanford arm)."""
+    preferred: float = math.radians(45.0)
+    """[rad] the best angle."""
+
+    def __call__(self, arm: Arm, q: NDArray[np.float64]) -> float:
+        """|preferred − q[joint]| [rad]."""
+        joint = self.joint if self.joint is not None else arm.grasp_joint
+        if joint is None:
+            raise ValueError(
+                f"arm {arm.name!r} has no grasp joint; give JointAngleRating(joint=...)"
+            )
+        return abs(self.preferred - float(q[joint]))
+
+
+SEED_GRASP_RATING = JointAngleRating()
+"""The seed's grasp rating: |45° − θ5| (L2096)."""
+
+
+@dataclass(frozen=True)
+class JointMarginRating:
+    """cost = −min_j (distance to the nearer limit of joint j) / (range of joint j) [1].
+
+    Prefers configurations far from every joint stop; 0 at a stop, −0.5 at mid-range.
+    """
+
+    def __call__(self, arm: Arm, q: NDArray[np.float64]) -> float:
+        """Negative smallest normalised margin to the joint limits."""
+        lim = arm.limits
+        span = np.maximum(lim.upper - lim.lower, 1e-12)
+        margin = np.minimum(q - lim.lower, lim.upper - q) / span
+        return -float(np.min(margin))
+
+
+@dataclass(frozen=True)
+class RatedSolution:
+    """A configuration with its cost; ``index`` is its position in the input list."""
+
+    cost: float
+    index: int
+    q: NDArray[np.float64]
+
+
+def rank_solutions(
+    arm: Arm, solutions: Sequence[ArrayLike], rating: SolutionRating = SEED_GRASP_RATING
+) -> list[RatedSolution]:
+    """Solutions sorted by (cost, input order): deterministic ties, best first."""
+    rated = []
+    for i, s in enumerate(solutions):
+        q = np.array(s, dtype=float)
+        rated.append(RatedSolution(float(rating(arm, q)), i, q))
+    return sorted(rated, key=lambda r: (r.cost, r.index))
