@@ -1,0 +1,200 @@
+"""Any URDF arm: a hand-written planar arm checked against its closed form, and the UR5 of the
+optional ``example-robot-data`` package checked against Universal Robots' published DH table."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from synth.exceptions import ArmModelError
+from synth.models.arm import (
+    CollisionScene,
+    build_ik,
+    example_robot_data_dir,
+    load_arm,
+    load_urdf_arm,
+    solve_ik,
+)
+from synth.models.spec import ArmSpec, HandSpec
+
+ROBOTS = example_robot_data_dir()
+needs_ur5 = pytest.mark.skipif(
+    ROBOTS is None,
+    reason="example-robot-data is not installed (optional extra: pip install '.[robots]')",
+)
+
+L1, L2 = 0.4, 0.3  # [m] link lengths of the planar test arm
+
+PLANAR = f"""<?xml version="1.0"?>
+<robot name="planar">
+  <link name="base"/>
+  <link name="upper"><collision><origin xyz="{L1 / 2} 0 0"/>
+    <geometry><box size="{L1} 0.04 0.04"/></geometry></collision></link>
+  <link name="fore"><collision><origin xyz="{L2 / 2} 0 0"/>
+    <geometry><box size="{L2} 0.04 0.04"/></geometry></collision></link>
+  <link name="tip"/>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="upper"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" velocity="2" effort="10"/></joint>
+  <joint name="j2" type="revolute"><parent link="upper"/><child link="fore"/>
+    <origin xyz="{L1} 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-2.5" upper="2.5" velocity="3" effort="10"/></joint>
+  <joint name="j3" type="prismatic"><parent link="fore"/><child link="tip"/>
+    <origin xyz="{L2} 0 0"/><axis xyz="1 0 0"/>
+    <limit lower="0" upper="0.1" velocity="0.5" effort="10"/></joint>
+</robot>
+"""
+
+
+@pytest.fixture
+def planar(tmp_path: Path) -> Path:
+    path = tmp_path / "planar.urdf"
+    path.write_text(PLANAR)
+    return path
+
+
+def test_planar_urdf_forward_kinematics_matches_closed_form(planar: Path):
+    base = pin.SE3(pin.utils.rotate("z", 0.3), np.array([1.0, 2.0, 0.5]))
+    arm = load_urdf_arm(planar, "tip", HandSpec(), transform_world_base=base)
+    rng = np.random.default_rng(21)
+    for _ in range(50):
+        q = rng.uniform(arm.limits.lower, arm.limits.upper)
+        # Closed form in the base frame: a planar RR arm with a prismatic extension of the forearm.
+        reach = L2 + q[2]
+        x = L1 * math.cos(q[0]) + reach * math.cos(q[0] + q[1])
+        y = L1 * math.sin(q[0]) + reach * math.sin(q[0] + q[1])
+        expected = base * pin.SE3(pin.utils.rotate("z", q[0] + q[1]), np.array([x, y, 0.0]))
+        got = arm.forward(q)
+        assert np.allclose(got.homogeneous, expected.homogeneous, atol=1e-12)
+
+
+def test_planar_urdf_limits_and_ik_round_trip(planar: Path):
+    arm = load_urdf_arm(planar, "tip", HandSpec())
+    assert arm.limits.kinds == ("revolute", "revolute", "prismatic")
+    assert np.allclose(arm.limits.velocity, [2, 3, 0.5])
+    # No acceleration limits in a URDF: v / 0.25 s by default.
+    assert np.allclose(arm.limits.acceleration, [8, 12, 2])
+    q = np.array([0.5, -0.7, 0.05])
+    target = arm.forward(q)
+    # A 3-joint arm cannot follow an arbitrary 6-D pose, but this one is reachable.
+    result = solve_ik(build_ik(arm, target), np.random.default_rng(0))
+    for s in result.solutions:
+        assert np.linalg.norm(pin.log6(arm.forward(s).actInv(target)).vector) < 1e-9
+
+
+def test_unknown_tool_frame_and_missing_file_are_reported(planar: Path, tmp_path: Path):
+    with pytest.raises(ArmModelError, match="no frame 'flange'"):
+        load_urdf_arm(planar, "flange", HandSpec())
+    with pytest.raises(ArmModelError, match="not found"):
+        load_urdf_arm(tmp_path / "nope.urdf", "tip", HandSpec())
+
+
+def test_continuous_joint_is_rejected(tmp_path: Path):
+    path = tmp_path / "wheel.urdf"
+    path.write_text(
+        PLANAR.replace(
+            'type="revolute"><parent link="base"/>', 'type="continuous"><parent link="base"/>'
+        )
+    )
+    with pytest.raises(ArmModelError, match="only revolute and prismatic"):
+        load_urdf_arm(path, "tip", HandSpec())
+
+
+def test_task_spec_names_a_urdf_with_relative_paths_and_overrides(planar: Path):
+    spec = ArmSpec(
+        urdf="planar.urdf",
+        tool_frame="tip",
+        base={"translation": ["10 cm", "0 cm", "0 cm"]},
+        velocity_limits=["1 rad/s", "90 deg/s", "10 cm/s"],
+    )
+    arm = load_arm(spec, HandSpec(), base_dir=planar.parent)
+    assert np.allclose(arm.limits.velocity, [1.0, math.pi / 2, 0.1])
+    assert np.allclose(arm.forward(np.zeros(3)).translation, [0.1 + L1 + L2, 0, 0])
+    with pytest.raises(ArmModelError, match="2 velocity limits for 3 joints"):
+        load_arm(
+            spec.model_copy(update={"velocity_limits": (1.0, 1.0)}),
+            HandSpec(),
+            base_dir=planar.parent,
+        )
+
+
+def ur5_spec(**extra) -> ArmSpec:
+    assert ROBOTS is not None
+    ur = ROBOTS / "ur_description"
+    return ArmSpec(
+        urdf=str(ur / "urdf" / "ur5_robot.urdf"),
+        tool_frame="tool0",
+        package_dirs=(str(ROBOTS.parent.parent),),
+        srdf=str(ur / "srdf" / "ur5.srdf"),
+        # The hand's palm is bolted to the bare flange: the hand frame sits L_f + h_palm ahead.
+        tool_offset={
+            "translation": ["0 cm", "0 cm", f"{(HandSpec().finger_length + 0.03) * 100} cm"]
+        },
+        **extra,
+    )
+
+
+def ur5_dh_position(q: np.ndarray) -> np.ndarray:
+    """tool0 origin by Universal Robots' published UR5 DH table (d1, a2, a3, d4, d5, d6)."""
+    d = [0.089159, 0, 0, 0.10915, 0.09465, 0.0823]
+    a = [0, -0.425, -0.39225, 0, 0, 0]
+    alpha = [math.pi / 2, 0, 0, math.pi / 2, -math.pi / 2, 0]
+    T = np.eye(4)
+    for i in range(6):
+        ct, st, ca, sa = math.cos(q[i]), math.sin(q[i]), math.cos(alpha[i]), math.sin(alpha[i])
+        T = T @ np.array(
+            [
+                [ct, -st * ca, st * sa, a[i] * ct],
+                [st, ct * ca, -ct * sa, a[i] * st],
+                [0, sa, ca, d[i]],
+                [0, 0, 0, 1],
+            ]
+        )
+    return T[:3, 3]
+
+
+@needs_ur5
+def test_ur5_matches_published_dh_and_solves_ik():
+    arm = load_arm(ur5_spec())
+    assert arm.nq == 6
+    data = arm.model.createData()
+    tool0 = arm.model.getFrameId("tool0")
+    rz_pi = pin.utils.rotate("z", math.pi)  # ur_description's base_link faces the DH base backwards
+    rng = np.random.default_rng(31)
+    for _ in range(30):
+        q = rng.uniform(-math.pi, math.pi, 6)
+        pin.framesForwardKinematics(arm.model, data, q)
+        assert np.allclose(data.oMf[tool0].translation, rz_pi @ ur5_dh_position(q), atol=1e-9)
+    # Hand frame = tool0 · tool_offset (pure translation along the flange axis).
+    q = np.array([0.3, -1.2, 1.0, -1.0, -1.5, 0.2])
+    offset = HandSpec().finger_length + 0.03
+    pin.framesForwardKinematics(arm.model, data, q)
+    expected = data.oMf[tool0] * pin.SE3(np.eye(3), np.array([0, 0, offset]))
+    assert np.allclose(arm.forward(q).homogeneous, expected.homogeneous, atol=1e-12)
+    # DLS round trip on random reachable poses.
+    for _ in range(5):
+        q = rng.uniform(-math.pi, math.pi, 6)
+        target = arm.forward(q)
+        solutions = arm.inverse(target, rng=rng)
+        assert solutions
+        for s in solutions:
+            err = pin.log6(arm.forward(s).actInv(target)).vector
+            assert np.linalg.norm(err[:3]) < 1e-9 and np.linalg.norm(err[3:]) < 1e-9
+            assert arm.limits.contains(s)
+
+
+@needs_ur5
+def test_ur5_collision_pairs_follow_srdf_and_adjacency():
+    arm = load_arm(ur5_spec())
+    scene = CollisionScene(arm)
+    checked = {frozenset(p) for p in scene.pairs}
+    # SRDF-disabled (base_link, upper_arm_link) and adjacent (shoulder, upper arm) are not checked.
+    assert frozenset(("base_link_0", "upper_arm_link_0")) not in checked
+    assert frozenset(("shoulder_link_0", "upper_arm_link_0")) not in checked
+    assert scene.excluded[frozenset(("base_link_0", "upper_arm_link_0"))] == "srdf"
+    # Stretched out along the DH x axis nothing touches: no false positives at the home pose.
+    assert scene.collisions(np.zeros(6)) == []
+    assert scene.clearance(np.zeros(6)).distance > 0.01
