@@ -197,3 +197,28 @@ def test_finger_opening_moves_the_fingers(arm):
         left = hand.actInv(scene.body_pose(q, "finger_left")).translation
         right = hand.actInv(scene.body_pose(q, "finger_right")).translation
         assert math.isclose(right[0] - left[0], w + HAND.finger_thickness, abs_tol=1e-12)
+
+
+def test_hull_bounds_underestimate_and_are_exact_near_contact(arm):
+    # A box with a drilled hole (concave mesh) and the pin held inside the hole, 1.8 mm from
+    # the wall: the hole's convex hull is solid, so the hull distance is ≤ 0, yet the exact
+    # mesh distance is the radial clearance, 5.0 − 3.175 mm (minus the mesh's polygon sag).
+    block = trimesh.creation.box(extents=(0.06, 0.06, 0.04))
+    drill = trimesh.creation.cylinder(radius=0.005, height=0.1, sections=64)
+    drilled = block.difference(drill)
+    pose = pin.SE3(np.eye(3), np.array([0.45, 1.0, 0.02]))  # top face at z = 4 cm
+    held = pin_between_fingers()
+    q = hand_down_at(arm, 0.45, 1.0, 0.04 + 3.54 * CM - 1.0 * CM)  # tip 1 cm down the hole
+    scene = CollisionScene(
+        arm, [("BLOCK", drilled, pose)], held=held, opening=0.0, allowed=grasp_contacts("PIN1")
+    )
+    k = scene.pairs.index(("PIN1", "BLOCK"))
+    exact = scene.distances(q)
+    loose = scene.distance_bounds(q, exact_below=-1.0)  # hulls only
+    assert loose[k] <= 0.0 < exact[k]
+    sag = 0.005 * (1 - math.cos(math.pi / 64))  # chord inset of a 64-gon
+    assert math.isclose(exact[k], 0.005 - 0.003175 - sag, abs_tol=2e-5)
+    assert np.all(loose <= exact + 1e-5)  # up to Coal's GJK tolerance (~1e-6 m)
+    tight = scene.distance_bounds(q, exact_below=0.001)
+    assert math.isclose(tight[k], exact[k], rel_tol=1e-9)
+    assert not scene.in_collision(q)

@@ -198,3 +198,27 @@ def test_ur5_collision_pairs_follow_srdf_and_adjacency():
     # Stretched out along the DH x axis nothing touches: no false positives at the home pose.
     assert scene.collisions(np.zeros(6)) == []
     assert scene.clearance(np.zeros(6)).distance > 0.01
+
+
+@needs_ur5
+def test_ur5_mesh_distances_bounded_by_hulls_and_swept_check():
+    import coal
+
+    from synth.models.arm import swept_segment
+
+    arm = load_arm(ur5_spec())
+    table = ("table", coal.Box(2.0, 2.0, 0.05), pin.SE3(np.eye(3), np.array([0.0, 0.0, -0.025])))
+    scene = CollisionScene(arm, [table])
+    rng = np.random.default_rng(33)
+    for _ in range(10):
+        q = rng.uniform(-math.pi, math.pi, 6)
+        exact = scene.distances(q)
+        bound = scene.distance_bounds(q, exact_below=-1.0)  # convex hulls contain the meshes
+        positive = exact > 0
+        assert np.all(bound[positive] <= exact[positive] + 1e-5)
+    # A free move above the table: conservative advancement agrees with dense sampling.
+    q0 = np.array([0.0, -1.2, 1.2, -1.57, -1.57, 0.0])
+    q1 = np.array([1.2, -1.0, 1.0, -1.57, -1.57, 0.5])
+    result = swept_segment(scene, q0, q1)
+    dense = min(scene.distances(q0 + t * (q1 - q0)).min() for t in np.linspace(0, 1, 201))
+    assert result.free and dense > 0.01 and result.checks < 100

@@ -59,6 +59,19 @@ def coal_geometry(geometry: Geometry) -> coal.CollisionGeometry:
     )
 
 
+def _is_mesh(geometry: coal.CollisionGeometry) -> bool:
+    return isinstance(geometry, coal.BVHModelBase)
+
+
+def convex_hull(geometry: coal.CollisionGeometry) -> coal.CollisionGeometry:
+    """Return the convex hull of a mesh (built once, kept on the mesh); other shapes unchanged."""
+    if not _is_mesh(geometry):
+        return geometry
+    if geometry.convex is None:
+        geometry.buildConvexHull(False, "Qt")
+    return geometry.convex
+
+
 @dataclass(frozen=True, eq=False)
 class Obstacle:
     """A named environment body at a fixed world pose T_world_obstacle."""
@@ -160,6 +173,29 @@ class CollisionScene:
                 )
             )
         self.geometry_data = self.geometry_model.createData()
+        # The same pairs over convex hulls of the meshes: a fast lower bound on every distance.
+        self.bound_model = pin.GeometryModel()
+        for body in self.bodies:
+            hull = Body(
+                body.name,
+                body.joint,
+                body.link,
+                body.placement,
+                convex_hull(body.geometry),
+                body.role,
+            )
+            self.bound_model.addGeometryObject(hull.geometry_object(self.model))
+        for a, b in self.pairs:
+            self.bound_model.addCollisionPair(
+                pin.CollisionPair(
+                    self.bound_model.getGeometryId(a), self.bound_model.getGeometryId(b)
+                )
+            )
+        self.bound_data = self.bound_model.createData()
+        meshes = {b.name for b in self.bodies if _is_mesh(b.geometry)}
+        self._bound_is_exact = np.array(
+            [a not in meshes and b not in meshes for a, b in self.pairs], dtype=bool
+        )
         index = {n: i for i, n in enumerate(names)}
         self.body_bounds = body_motion_bounds(self.model, arm.limits, self.bodies)
         self.pair_bounds = pair_motion_bounds(
@@ -272,6 +308,30 @@ class CollisionScene:
         return np.fromiter(
             (results[k].min_distance for k in range(len(self.pairs))), float, len(self.pairs)
         )
+
+    def distance_bounds(self, q: ArrayLike, exact_below: float = 0.0) -> NDArray[np.float64]:
+        """Lower bounds [m] on the pair distances at ``q``, exact where they are ≤ ``exact_below``.
+
+        Meshes are replaced by their convex hulls, which contain them, so the hull distance can
+        only underestimate: d(hull A, hull B) ≤ d(A, B). Pairs whose bound is ≤ ``exact_below``
+        are recomputed on the meshes themselves. Swept checks use this: a fast bound is enough to
+        size a step, and only near-contacts need the exact, slower mesh distance.
+        """
+        qa = self._q(q)
+        pin.computeDistances(self.model, self.data, self.bound_model, self.bound_data, qa)
+        results = self.bound_data.distanceResults
+        n = len(self.pairs)
+        d = np.fromiter((results[k].min_distance for k in range(n)), float, n)
+        recheck = np.flatnonzero((d <= exact_below) & ~self._bound_is_exact)
+        if recheck.size:
+            pin.updateGeometryPlacements(
+                self.model, self.data, self.geometry_model, self.geometry_data
+            )
+            exact = self.geometry_data.distanceResults
+            for k in recheck:
+                pin.computeDistance(self.geometry_model, self.geometry_data, int(k))
+                d[k] = exact[int(k)].min_distance
+        return d
 
     def clearance(self, q: ArrayLike) -> Clearance:
         """Return the smallest distance over the checked pairs and its pair (inf: none)."""

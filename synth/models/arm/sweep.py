@@ -23,7 +23,10 @@ S_a being the joints supporting a (an environment body has none). From a configu
 distance d > 0 the pair therefore cannot touch before s + d/M. The check steps to
 s + min over pairs of d/M (conservative advancement), so every step is bounded by a distance
 argument, never by a fixed count, and no obstacle, however thin, is stepped over. A pair closer
-than ``clearance`` counts as a collision, which also bounds the number of steps.
+than ``clearance`` counts as a collision, which also bounds the number of steps. Distances come
+from :meth:`CollisionScene.distance_bounds`: convex hulls of meshes give lower bounds (steps can
+only shrink), and a pair is re-measured on its meshes before it is declared too close. Coal's
+distances are accurate to its GJK tolerance (about 1 µm), far below the default clearance.
 """
 
 from __future__ import annotations
@@ -141,7 +144,7 @@ def _advance(
         q = position(s)
         if not scene.pairs:
             return SweepResult(True, end, q, None, float("inf"), checks)
-        d = scene.distances(q)
+        d = scene.distance_bounds(q, exact_below=options.clearance)
         checks += 1
         k = int(np.argmin(d))
         if d[k] <= options.clearance:
