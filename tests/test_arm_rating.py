@@ -8,10 +8,12 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from synth.exceptions import UnreachableError
 from synth.models.arm import (
     SEED_GRASP_RATING,
     JointAngleRating,
     JointMarginRating,
+    best_solution,
     build_stanford_arm,
     rank_solutions,
 )
@@ -59,3 +61,14 @@ def test_ties_keep_input_order_and_other_ratings_plug_in(arm):
     assert ranked[0].index == 1
     # Any joint, any preferred angle.
     assert math.isclose(JointAngleRating(joint=0, preferred=0.0)(arm, q), 0.0)
+
+
+def test_best_solution_or_a_clear_unreachable_error(arm):
+    q = np.array([0.4, -1.3, 0.5, -0.5, -50 * DEG, -0.3])
+    best = best_solution(arm, arm.forward(q))
+    assert best.q[4] > 0  # the wrist flip with θ5 = +50°, 5° from the seed's ideal
+    far = pin.SE3(np.eye(3), np.array([2.0, 0.0, 0.4]))
+    with pytest.raises(UnreachableError, match="unreachable") as info:
+        best_solution(arm, far)
+    assert info.value.translation == (2.0, 0.0, 0.4)
+    assert "joint limits" in info.value.reason

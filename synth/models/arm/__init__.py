@@ -33,6 +33,7 @@ from synth.models.arm.rating import (
     JointMarginRating,
     RatedSolution,
     SolutionRating,
+    best_solution,
     rank_solutions,
 )
 from synth.models.arm.stanford import (
@@ -92,6 +93,7 @@ __all__ = [
     "SweepOptions",
     "SweepResult",
     "TimingOptions",
+    "best_solution",
     "build_ik",
     "build_stanford_arm",
     "coal_geometry",

@@ -19,8 +19,10 @@ from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
+import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
+from synth.exceptions import UnreachableError
 from synth.models.arm.arm import Arm
 
 
@@ -77,6 +79,34 @@ class RatedSolution:
     cost: float
     index: int
     q: NDArray[np.float64]
+
+
+def best_solution(
+    arm: Arm,
+    transform_world_hand: pin.SE3,
+    rating: SolutionRating = SEED_GRASP_RATING,
+    hint: ArrayLike | None = None,
+    rng: np.random.Generator | None = None,
+) -> RatedSolution:
+    """Return the best-rated configuration reaching a hand pose; raise if there is none.
+
+    Raises :class:`~synth.exceptions.UnreachableError` with the pose and the reason (no
+    attainable closed-form solution inside the joint limits, or none found by the DLS solver).
+    """
+    solutions = arm.inverse(transform_world_hand, hint=hint, rng=rng)
+    if not solutions:
+        reason = (
+            "no attainable solution inside the joint limits (closed form)"
+            if arm.closed_form is not None
+            else "the DLS solver found no solution from its starts"
+        )
+        t = transform_world_hand.translation
+        raise UnreachableError(
+            (float(t[0]), float(t[1]), float(t[2])),
+            tuple(float(v) for v in transform_world_hand.rotation.reshape(-1)),
+            reason,
+        )
+    return rank_solutions(arm, solutions, rating)[0]
 
 
 def rank_solutions(
