@@ -1,0 +1,329 @@
+"""Strategy records: the decisions of seed §4.1 (L1840–1925), frozen, SI units.
+
+A :class:`PinInHoleStrategy` holds everything code generation needs — every number a template
+prints comes from here (the codegen must not decide anything). Destination points follow the
+seed's (what, base, xf) form (L1912–1925): make the controllable frame ``what`` coincide with
+``base ∘ xf``. ``to_json`` gives the shapes of ``synth plan --json`` (issue "strategy
+generation"), which the HTTP API returns too.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+
+def _se3_json(pose: pin.SE3) -> dict[str, list[float]]:
+    return {
+        "translation": [float(x) for x in pose.translation],
+        "rotation_vector": [float(x) for x in pin.log3(pose.rotation)],
+    }
+
+
+@dataclass(frozen=True, eq=False)
+class Destination:
+    """Make the controllable frame ``what`` coincide with ``base ∘ xf`` (seed L1912–1925).
+
+    ``what`` and ``base`` are AL names (``BMANIP``, ``PIN1``, ``BH1``); ``xf`` is a constant
+    transform [m, rad]. ``label`` says which point of the strategy it is (``approach``, …).
+    """
+
+    label: str
+    what: str
+    base: str
+    xf: pin.SE3
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON form (SI)."""
+        return {"label": self.label, "what": self.what, "base": self.base, "xf": _se3_json(self.xf)}
+
+
+@dataclass(frozen=True)
+class Grasp:
+    """Grasp parameters of seed §4.3.2 (L2020): ``hand = pin ∘ trans(rot(ẑ,ω)·rot(x̂,γ), (0,0,d))``.
+
+    ``omega`` [rad] turns the hand about the pin axis, ``gamma`` [rad] is the angle between the
+    pin axis and the hand's approach vector, ``distance`` [m] is measured from the pin tip.
+    """
+
+    omega: float
+    gamma: float
+    distance: float
+
+    def pin_from_hand(self) -> pin.SE3:
+        """``trans(rot(ẑ, ω)·rot(x̂, γ), (0, 0, d))``: the hand in the pin's frame."""
+        rotation = pin.exp3(np.array([0.0, 0.0, self.omega])) @ pin.exp3(
+            np.array([self.gamma, 0.0, 0.0])
+        )
+        return pin.SE3(rotation, np.array([0.0, 0.0, self.distance]))
+
+    def to_json(self) -> dict[str, float]:
+        """JSON form (SI)."""
+        return {"omega": self.omega, "gamma": self.gamma, "distance": self.distance}
+
+
+@dataclass(frozen=True, eq=False)
+class GraspStrategy:
+    """Pickup by grasping between the fingers (seed §4.1 "Grasp Strategy", L1895–1910).
+
+    Openings in [m]; ``goodness`` is the expected pickup time [s]. ``grasp_determination`` is
+    the pin-in-hand error block after ``center`` (None = NILTRANS, exactly held).
+    ``joint_solution`` is the arm configuration at the grasp point and ``rating`` its grade
+    (seed L2086–2100: |45° − θ5|, lower is better).
+    """
+
+    object: str
+    grasp: Grasp
+    approach_point: Destination
+    grasp_point: Destination
+    departure_point: Destination
+    approach_opening: float
+    grasp_opening: float
+    goodness: float
+    rating: float
+    joint_solution: tuple[float, ...] = ()
+    grasp_determination: Any = None
+    preliminaries: tuple[str, ...] = ()
+    remarks: str = ""
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON form (SI)."""
+        return {
+            "object": self.object,
+            **self.grasp.to_json(),
+            "approach_point": self.approach_point.to_json(),
+            "grasp_point": self.grasp_point.to_json(),
+            "departure_point": self.departure_point.to_json(),
+            "approach_opening": self.approach_opening,
+            "grasp_opening": self.grasp_opening,
+            "goodness": self.goodness,
+            "rating": self.rating,
+            "remarks": self.remarks,
+        }
+
+
+@dataclass(frozen=True)
+class ErrorFootprint:
+    """Pin-tip errors against the hole at the approach (seed §4.5, Fig. 4.1).
+
+    A box with half-sides ``dx, dy`` [m] in the hole plane rotated by ``zeta`` [rad] about the
+    hole axis, ``dz`` [m] along it, and the axis tilt ``dtheta`` [rad]. Values are the certified
+    bounds the decisions use; ``first_order`` keeps the seed's linearised figures for display.
+    """
+
+    dx: float
+    dy: float
+    dz: float
+    zeta: float
+    dtheta: float
+    first_order: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def dr(self) -> float:
+        """``Δr = max(Δx, Δy)`` (seed L2437)."""
+        return max(self.dx, self.dy)
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON form (SI)."""
+        return {
+            "dx": self.dx,
+            "dy": self.dy,
+            "dz": self.dz,
+            "zeta": self.zeta,
+            "dtheta": self.dtheta,
+            "first_order": dict(self.first_order),
+        }
+
+
+@dataclass(frozen=True, eq=False)
+class Tap:
+    """A tap on the hole's surface to measure the hole along its axis (seed §4.5.2).
+
+    ``offset`` [m] is the tapping place in the hole frame (z = 0 on the surface);
+    ``place``/``via``/``target`` the destinations of the guarded move; ``dz_after`` [m] the
+    certified Δz with the measurement added; ``time`` [s] its expected extra time.
+    """
+
+    offset: tuple[float, float, float]
+    surface: str
+    clearance: float
+    place: Destination
+    via: Destination
+    target: Destination
+    dz_after: float
+    time: float
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON form (SI)."""
+        return {
+            "offset": list(self.offset),
+            "surface": self.surface,
+            "clearance": self.clearance,
+            "dz_after": self.dz_after,
+            "time": self.time,
+        }
+
+
+@dataclass(frozen=True)
+class Search:
+    """A spiral search over the error footprint (seed §4.8, L2740–2790).
+
+    Rings of radius ``step, 2·step, …`` [m] up to ``rings·step``, points every ``step/r`` [rad]
+    around each, kept when ``|x| ≤ dx`` and ``|y| ≤ dy`` [m]; offsets are turned by ``zeta``
+    [rad] into the hole frame. ``expected_points`` counts the pattern points within
+    ``dx/2, dy/2`` (seed L2470), ``time`` [s] their expected cost.
+    """
+
+    dx: float
+    dy: float
+    zeta: float
+    step: float
+    rings: int
+    expected_points: int
+    time: float
+
+    @property
+    def max_radius(self) -> float:
+        """Largest ring radius [m]."""
+        return self.rings * self.step
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON form (SI)."""
+        return {
+            "dx": self.dx,
+            "dy": self.dy,
+            "zeta": self.zeta,
+            "step": self.step,
+            "rings": self.rings,
+            "expected_points": self.expected_points,
+            "time": self.time,
+        }
+
+
+@dataclass(frozen=True, eq=False)
+class PinInHoleStrategy:
+    """A pin-in-hole strategy (seed §4.1 "Pin-in-Hole Strategy", L1848–1890).
+
+    ``phi`` [rad] is the pin's rotation relative to the hole on insertion; ``dtry`` [m] how far
+    into the hole the guarded move aims (d_f + 1 in); ``standoff`` [m] the approach height
+    above the hole. ``success_threshold`` [m] is the ``DISTANCE_OFF`` test of the generated
+    program and ``force_threshold`` [N] the guarded moves' stop force. Times in [s]:
+    ``ttime`` (pickup + transport), ``finetime`` (tap + search), ``goodness`` = their sum.
+    """
+
+    pin: str
+    hole: str
+    hand: str
+    pickup: GraspStrategy
+    phi: float
+    dtry: float
+    standoff: float
+    approach: Destination
+    destination: Destination
+    target: Destination
+    d_f: float
+    d_s: float
+    dr_ok: float
+    success_threshold: float
+    force_threshold: float
+    ttime: float
+    finetime: float = 0.0
+    errors: ErrorFootprint | None = None
+    tap: Tap | None = None
+    search: Search | None = None
+    preliminaries: tuple[str, ...] = ()
+    name: str = ""
+
+    @property
+    def goodness(self) -> float:
+        """Expected total time [s]: ``ttime + finetime`` (seed L1888)."""
+        return self.ttime + self.finetime
+
+    @property
+    def refined(self) -> bool:
+        """True once the accuracy refinements of §4.5 have been applied."""
+        return self.errors is not None
+
+    def to_json(self) -> dict[str, Any]:
+        """The ``strategy`` object of ``synth plan --json`` (SI units)."""
+        errors = self.errors
+        return {
+            "name": self.name,
+            "pin": self.pin,
+            "hole": self.hole,
+            "grasp": self.pickup.grasp.to_json(),
+            "pickup": self.pickup.to_json(),
+            "phi": self.phi,
+            "dtry": self.dtry,
+            "standoff": self.standoff,
+            "tap": None if self.tap is None else self.tap.to_json(),
+            "search": None if self.search is None else self.search.to_json(),
+            "errors": None
+            if errors is None
+            else {
+                "dx": errors.dx,
+                "dy": errors.dy,
+                "dz": errors.dz,
+                "zeta": errors.zeta,
+                "dtheta": errors.dtheta,
+            },
+            "time": {
+                "transport": self.ttime,
+                "fine": self.finetime,
+                "total": self.goodness,
+            },
+            "success_threshold": self.success_threshold,
+            "force_threshold": self.force_threshold,
+        }
+
+
+@dataclass(frozen=True)
+class Rejection:
+    """A candidate the planner dropped, and why (shown by ``synth plan``)."""
+
+    candidate: str
+    reason: str
+
+    def to_json(self) -> dict[str, str]:
+        """JSON form."""
+        return {"candidate": self.candidate, "reason": self.reason}
+
+
+@dataclass(frozen=True, eq=False)
+class PlanResult:
+    """Outcome of planning: the chosen strategy, the candidates and the rejections."""
+
+    strategy: PinInHoleStrategy
+    candidates: tuple[PinInHoleStrategy, ...]
+    rejected: tuple[Rejection, ...]
+    refined: int
+    planning_time: float
+    counters: dict[str, int] = field(default_factory=dict)
+
+    def to_json(self) -> dict[str, Any]:
+        """The whole ``synth plan --json`` document (without the program text)."""
+        return {
+            "strategy": self.strategy.to_json(),
+            "candidates": [
+                {
+                    "name": c.name,
+                    "grasp": c.pickup.grasp.to_json(),
+                    "phi": c.phi,
+                    "refined": c.refined,
+                    "time": c.goodness,
+                }
+                for c in self.candidates
+            ],
+            "rejected": [r.to_json() for r in self.rejected],
+            "refined": self.refined,
+            "planning_time": self.planning_time,
+            "counters": dict(self.counters),
+        }
+
+
+DEG = math.pi / 180.0
+INCH = 0.0254
