@@ -148,3 +148,22 @@ class NoSolutionFound(SynthError):
 
 class TrajectoryError(SynthError):
     """A time-optimal trajectory could not be computed (limits violated or solver failure)."""
+
+
+class ALRuntimeError(SynthError):
+    """An AL program fails while it runs.
+
+    Raised for a type or dimension error, an unknown or unassigned name, a motion of a frame
+    that is not affixed to the hand, an affixment cycle, a deadlock, a runaway loop.
+    ``line`` and ``column`` (1-based) locate the AL construct at fault; ``problem`` says what
+    went wrong; ``filename`` names the program. The message is one line:
+    ``file:line:column: problem``. An ``ABORT`` statement is not an error: the interpreter
+    reports it as an outcome (:class:`synth.al.interpreter.ALAbort`).
+    """
+
+    def __init__(self, line: int, column: int, problem: str, *, filename: str = "<al>") -> None:
+        self.line = line
+        self.column = column
+        self.problem = problem
+        self.filename = filename
+        super().__init__(f"{filename}:{line}:{column}: {problem}")
