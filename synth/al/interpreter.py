@@ -1,0 +1,1054 @@
+"""Run a parsed AL program against a :class:`~synth.al.machine.Machine`.
+
+The interpreter owns the program's beliefs: its variables, their block scopes and the
+affixment graph. It learns about the world only through the machine (where the hand really
+is, what it senses, the finger opening, the clock). It never looks at a true world itself.
+Each statement and expression node type has one method, dispatched by node type. Each method
+visits its children explicitly, because loops, branches and monitors decide what runs and when
+(the ``lark.visitors.Interpreter`` style, applied to the dataclass AST of
+:mod:`synth.al.ast`).
+
+Semantics, with the seed's lines (S:n) and seed-al-subset.md sections:
+
+**Names and scopes.** A block's declarations, wherever they appear in it, are made when the
+block is entered (al-language.md §3). A block's names are released when it ends. Its frames
+leave the affixment graph: their links are cut, and frames affixed to them keep their values
+(S:245). A program's top-level statements run in the *global* scope, which also holds the world
+binding (:mod:`synth.al.binding`). Assigning a name that is declared nowhere declares it
+implicitly in the global scope, typed by its first value: generated programs never declare
+``DISTANCE_OFF``, ``CORR`` or ``PIN1`` (S:2737, S:2827). Reading a name with no value is an
+error. No value defaults to 0: a referee should not invent one. Predeclared names (units,
+``XHAT``, ``NILROTN``, ``TRUE``, ...) are read-only. So are the arm's hand names (``BLUE``,
+``BMANIP``, ``BARM``, ``BHAND``, ``BFINGERS``: one frame, the sensed hand, moved only by
+``MOVE``).
+
+**Affixment** (S:1160–1200, S:1466–1480; seed-al-subset.md §4). Each frame has at most one
+parent. ``AFFIX A TO B AT T`` sets A ← B*T now and whenever B changes. Without ``AT``, T is the
+current INV(B)*A. Affixing A again replaces its old link, and a cycle is an error. Chains are
+transitive. ``RIGIDLY``: assigning A also moves B (B ← A*INV(T)), and with B everything else
+affixed to it (S:1473–1477). Rigid links are followed upwards as far as they go. ``UNFIX A
+FROM B`` (either order, S:1327 vs S:1500) cuts the link, and A keeps its value. Undeclared
+names in AFFIX are declared implicitly as global frames, possibly still without a value: the
+seed affixes to ``pin_holder`` before assigning it (S:1554–1556).
+
+*Decision (§7): assigning a non-rigidly affixed frame* keeps the new value and re-derives its
+relation, T ← INV(B)*A, so it keeps following B from there. The parent does not move (that is
+what ``RIGIDLY`` is for).
+
+**Motion** (S:1341, S:1185–1196; §4–§5). ``MOVE F TO D VIA P1, ...``: D, the via points, the
+``WITH`` constraints and the ``ON`` thresholds and directions are all evaluated first, in that
+textual order, before the arm moves. ``MOVE BMANIP TO BMANIP*TRANS(...)`` is therefore relative
+to the start. F is the hand or a frame affixed to it through a chain. With T = INV(hand)*F at
+the start, the hand's targets are P_i*INV(T), then D*INV(T). After the motion, and at every
+monitor firing, the hand frame is set to the machine's sensed pose and every frame affixed to
+it follows. After an early stop, ``PIN1`` therefore holds where the pin really stopped
+(seed-al-subset.md §5).
+
+**Monitors.** ``ON FORCE(v) > f``, ``TORQUE(v) rel t``, ``OPENING rel w``, ``DURATION rel t``,
+an event name, or ``ARRIVAL``. All but ``ARRIVAL`` go to the machine as data
+(:data:`~synth.al.machine.MonitorSpec`). When the machine reports a firing, the handler runs at
+that instant. ``STOP`` ends the motion there, and the rest of the handler still runs. Without a
+``STOP``, the motion resumes. Execution continues after the motion statement either way.
+*Decision (§7): each monitor fires at most once per motion.* ``ON ARRIVAL`` handlers run after a
+motion that reached its last target with no handler having stopped it (S:1396–1399). ``ABORT``
+in a handler stops the motion and ends the program. A motion statement inside a handler is
+allowed only after ``STOP``, since the arm is still moving before it. The force direction is a
+world direction. ``FORCE(frame*v)`` is read as ``FORCE(ORIENT(frame)*v)`` (S:1376 vs S:2735).
+Bare thresholds are in AL's bare units (``OPENING < .185`` is 0.185 cm).
+
+**Hand.** ``OPEN dev TO w``, ``CLOSE dev [TO w]`` and ``CENTER dev`` take any hand name as
+device (S:1286, S:2722, S:1780). They are motions too: they take monitors and constraints, and
+the hand frame is re-read afterwards, because ``CENTER`` moves the arm.
+
+**Control** (ALGOL 60). ``IF``, ``WHILE`` and ``FOR v ← a STEP s UNTIL c``: v ← a; then, while
+(v − c)·sign(s) ≤ 0, run the body and set v ← v + s. The step and the limit are re-evaluated
+each time they are used, so assigning v in the body ends the loop (S:1532). Assignment is also
+an expression: ``(n←n+1) ≤ 6``. *Decision (§7): AND and OR* take booleans and evaluate both
+operands, left to right, as ALGOL 60 does; there is no short circuit, so side effects such as
+``ABS(X←...) < a AND ABS(Y←...) < b`` always happen. A relation chain evaluates every operand
+once. A statement budget (``max_statements``) turns a runaway loop into an error.
+
+**Processes.** ``COBEGIN s1; s2; ... COEND`` interleaves its branches cooperatively, one
+statement at a time per process. A branch runs until it finishes or blocks in ``WAIT``, then
+the next branch runs. The ``COBEGIN`` ends when all branches have. If every branch is blocked
+and nothing outside can signal, the result is a deadlock error at the ``WAIT``. Motions are
+atomic with respect to other processes. *Decision (§7): events* may be declared (``EVENT e``,
+block-scoped), or are declared implicitly as globals on first use. ``SIGNAL e`` adds one to the
+event's count. ``WAIT e`` takes one, or blocks while the count is zero. An ``ON e`` monitor
+fires only when the machine reports the event (an external sensor); signals from other
+processes cannot reach a motion in progress.
+
+**Outcome.** :meth:`Interpreter.run` returns a :class:`RunResult`. ``ABORT("...")`` is a normal
+outcome (:class:`ALAbort`, with the message and the AL line), not an exception. A faulty
+program raises :class:`~synth.exceptions.ALRuntimeError` with the AL line and column.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Callable, Generator, Iterator, Sequence
+from dataclasses import dataclass, field
+from typing import Any, cast
+
+import numpy as np
+import pinocchio as pin
+
+from synth.al import ast
+from synth.al.machine import (
+    DurationConstraint,
+    DurationMonitor,
+    EventMonitor,
+    ForceConstraint,
+    ForceMonitor,
+    Machine,
+    MonitorSpec,
+    MotionConstraint,
+    MotionResult,
+    OpeningMonitor,
+    Relation,
+    TorqueConstraint,
+    TorqueMonitor,
+)
+from synth.al.names import KEYWORDS
+from synth.al.values import (
+    CONSTANTS,
+    FORCE,
+    LENGTH,
+    TIME,
+    TORQUE,
+    Dimension,
+    Event,
+    OperandError,
+    Pose,
+    PoseKind,
+    Scalar,
+    Value,
+    Vector,
+    binary,
+    call_builtin,
+    coerce,
+    compare,
+    describe,
+    magnitude,
+    type_name,
+    unary,
+)
+from synth.exceptions import ALRuntimeError
+
+__all__ = [
+    "HAND_NAMES",
+    "ALAbort",
+    "Affixment",
+    "Interpreter",
+    "RunResult",
+    "run_program",
+]
+
+HAND_NAMES: tuple[str, ...] = ("BMANIP", "BLUE", "BARM", "BHAND", "BFINGERS")
+"""The blue arm's names (al-language.md §6): all denote its one hand frame and hand device."""
+
+_FLIP: dict[str, Relation] = {"<": ">", ">": "<", "≤": "≥", "≥": "≤", "=": "=", "≠": "≠"}
+_SENSORS = {"FORCE", "TORQUE"}
+
+
+@dataclass(frozen=True)
+class ALAbort:
+    """The program ended with ``ABORT(...)``: its message and the AL line of the statement."""
+
+    message: str
+    line: int
+    column: int = 0
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """The outcome of a run.
+
+    ``abort`` is None when the program ran to its end. ``statements`` counts the statements
+    executed. ``time`` is the machine clock at the end [s].
+    """
+
+    abort: ALAbort | None
+    statements: int
+    time: float
+
+    @property
+    def completed(self) -> bool:
+        """True when the program ran to its end without ``ABORT``."""
+        return self.abort is None
+
+
+@dataclass(frozen=True, eq=False)
+class Affixment:
+    """A link of the affixment graph: ``child = parent * parent_from_child`` [m]."""
+
+    child: str
+    parent: str
+    parent_from_child: pin.SE3
+    rigid: bool
+
+
+class _Aborted(Exception):
+    """Internal: unwinds the interpreter after ``ABORT``; :meth:`Interpreter.run` catches it."""
+
+    def __init__(self, abort: ALAbort) -> None:
+        super().__init__(abort.message)
+        self.abort = abort
+
+
+# --------------------------------------------------------------------------------------------
+# Variables, scopes, affixment links
+
+
+@dataclass(eq=False)
+class _Link:
+    parent: _Variable
+    parent_from_child: pin.SE3
+    rigid: bool
+
+
+@dataclass(eq=False)
+class _Variable:
+    name: str
+    type: str
+    value: Value | None = None
+    hand: bool = False
+    link: _Link | None = None
+    children: list[_Variable] = field(default_factory=list)
+
+    @property
+    def pose(self) -> Pose | None:
+        return self.value if isinstance(self.value, Pose) else None
+
+
+class _Scope:
+    def __init__(self, parent: _Scope | None, name: str) -> None:
+        self.parent = parent
+        self.name = name
+        self.variables: dict[str, _Variable] = {}
+
+    def lookup(self, name: str) -> _Variable | None:
+        scope: _Scope | None = self
+        while scope is not None:
+            found = scope.variables.get(name)
+            if found is not None:
+                return found
+            scope = scope.parent
+        return None
+
+
+@dataclass
+class _MotionState:
+    """One motion statement in progress, as its monitor handlers see it."""
+
+    stopped: bool = False
+    finished: bool = False
+
+
+@dataclass(frozen=True)
+class _Context:
+    """What a process carries: its innermost scope, and the motion whose handler it runs."""
+
+    scope: _Scope
+    motion: _MotionState | None = None
+
+
+def _se3_of(value: Pose | None) -> pin.SE3:
+    assert value is not None
+    return value.se3
+
+
+# --------------------------------------------------------------------------------------------
+# The interpreter
+
+
+class Interpreter:
+    """Executes AL programs on ``machine``; one instance holds one program's world model.
+
+    ``hand_names`` are the names of the arm's hand (all one frame and one device).
+    ``max_statements`` bounds the statements one :meth:`run` may execute.
+    """
+
+    def __init__(
+        self,
+        machine: Machine,
+        *,
+        hand_names: Sequence[str] = HAND_NAMES,
+        max_statements: int = 1_000_000,
+    ) -> None:
+        self.machine = machine
+        self.max_statements = max_statements
+        self.hand_names = tuple(n.upper() for n in hand_names)
+        self._global = _Scope(None, "<global>")
+        self._hand = _Variable(self.hand_names[0], "FRAME", hand=True)
+        for name in self.hand_names:
+            self._global.variables[name] = self._hand
+        self._filename = "<al>"
+        self._statements = 0
+        self._budget = max_statements
+        self._signals = 0
+        self._blocked: ast.Wait | None = None
+        self._active: _MotionState | None = None
+        self._sync_hand(machine.hand_pose())
+
+    # ---- public: binding and inspection
+
+    def define_frame(self, name: str, pose: pin.SE3, kind: str = "FRAME") -> None:
+        """Declare a global frame ``name`` with value ``pose`` [m] (the world binding)."""
+        upper = name.upper()
+        self._check_declarable(upper, None)
+        if upper in self._global.variables:
+            raise ValueError(f"{upper} is already bound")
+        variable = _Variable(upper, kind)
+        self._global.variables[upper] = variable
+        self._set_pose(variable, pose, None)
+
+    def affix(
+        self, child: str, parent: str, parent_from_child: pin.SE3 | None = None, *, rigid: bool
+    ) -> None:
+        """``AFFIX child TO parent [RIGIDLY] [AT parent_from_child]`` on global frames."""
+        c, p = self._global.lookup(child.upper()), self._global.lookup(parent.upper())
+        if c is None or p is None:
+            raise ValueError(f"affix {child} to {parent}: both must be bound first")
+        self._affix(c, p, parent_from_child, rigid, None)
+
+    def value(self, name: str) -> Value | None:
+        """The value of global ``name`` (None if it has none); constants too."""
+        upper = name.upper()
+        variable = self._global.lookup(upper)
+        if variable is not None:
+            return variable.value
+        return CONSTANTS.get(upper)
+
+    def frame(self, name: str) -> pin.SE3:
+        """The value of global frame ``name`` [m] (a copy)."""
+        value = self.value(name)
+        if not isinstance(value, Pose):
+            raise KeyError(f"{name} is not a frame with a value")
+        return pin.SE3(value.se3)
+
+    def affixment(self, name: str) -> Affixment | None:
+        """The link from global frame ``name`` to its parent, or None."""
+        variable = self._global.lookup(name.upper())
+        if variable is None or variable.link is None:
+            return None
+        link = variable.link
+        return Affixment(
+            variable.name, link.parent.name, pin.SE3(link.parent_from_child), link.rigid
+        )
+
+    # ---- running
+
+    def run(self, program: ast.Program) -> RunResult:
+        """Execute ``program``; returns its outcome, raises ALRuntimeError for a faulty one."""
+        self._filename = program.filename
+        start = self._statements
+        self._budget = start + self.max_statements
+        context = _Context(self._global)
+        steps = self._sequence(program.body, context, declare_in=self._global)
+        try:
+            for _ in steps:
+                self._deadlock()
+        except _Aborted as aborted:
+            return RunResult(aborted.abort, self._statements - start, self.machine.time())
+        finally:
+            steps.close()
+            self._release_machine()
+        return RunResult(None, self._statements - start, self.machine.time())
+
+    def _release_machine(self) -> None:
+        active = self._active
+        if active is not None and not active.stopped:
+            active.stopped = True
+            self.machine.stop()
+            self._sync_hand(self.machine.hand_pose())
+        self._active = None
+
+    def _deadlock(self) -> None:
+        wait = self._blocked
+        assert wait is not None
+        raise self._error(wait, f"WAIT {wait.event.name}: no process can signal it (deadlock)")
+
+    # ---- errors
+
+    def _error(self, node: ast.Node | None, problem: str) -> ALRuntimeError:
+        line, column = (node.line, node.column) if node is not None else (0, 0)
+        return ALRuntimeError(line, column, problem, filename=self._filename)
+
+    # ---- statements
+
+    def _sequence(
+        self, body: Sequence[ast.Stmt], cx: _Context, *, declare_in: _Scope | None = None
+    ) -> Generator[None, None, None]:
+        if declare_in is not None:
+            for statement in body:
+                if isinstance(statement, ast.Declaration):
+                    self._declare(statement, declare_in)
+        for statement in body:
+            yield from self._exec(statement, cx)
+
+    def _exec(self, statement: ast.Stmt, cx: _Context) -> Generator[None, None, None]:
+        self._statements += 1
+        if self._statements > self._budget:
+            raise self._error(
+                statement, f"more than {self.max_statements} statements executed (an endless loop?)"
+            )
+        method = _STATEMENTS.get(type(statement))
+        if method is None:
+            raise self._error(statement, f"cannot execute {type(statement).__name__}")
+        yield from method(self, statement, cx)
+
+    def _block(self, s: ast.Block, cx: _Context) -> Iterator[None]:
+        scope = _Scope(cx.scope, s.name or "<block>")
+        try:
+            yield from self._sequence(s.body, _Context(scope, cx.motion), declare_in=scope)
+        finally:
+            self._release(scope)
+
+    def _cobegin(self, s: ast.Cobegin, cx: _Context) -> Iterator[None]:
+        for statement in s.body:
+            if isinstance(statement, ast.Declaration):
+                self._declare(statement, cx.scope)
+        branches = [b for b in s.body if not isinstance(b, ast.Declaration)]
+        live = [self._exec(branch, cx) for branch in branches]
+        try:
+            while live:
+                progress = False
+                for branch in list(live):
+                    signals = self._signals
+                    try:
+                        next(branch)
+                    except StopIteration:
+                        live.remove(branch)
+                        progress = True
+                        continue
+                    progress = progress or self._signals != signals
+                if live and not progress:
+                    yield  # every branch waits: let an enclosing process signal
+        finally:
+            for branch in live:
+                branch.close()
+
+    def _declaration(self, s: ast.Declaration, cx: _Context) -> Iterator[None]:
+        return iter(())  # made when the block was entered
+
+    def _declare(self, s: ast.Declaration, scope: _Scope) -> None:
+        for name in s.names:
+            self._check_declarable(name.name, name)
+            if name.name in scope.variables:
+                raise self._error(name, f"{name.name} is declared twice in this block")
+            variable = _Variable(name.name, s.type)
+            if s.type == "EVENT":
+                variable.value = Event(name.name)
+            scope.variables[name.name] = variable
+
+    def _check_declarable(self, name: str, node: ast.Node | None) -> None:
+        if name in self.hand_names:
+            raise self._error(node, f"{name} is the arm's hand; it is predeclared")
+        if name in CONSTANTS or name in KEYWORDS:
+            raise self._error(node, f"{name} is predeclared in AL and cannot be redefined")
+
+    def _release(self, scope: _Scope) -> None:
+        for variable in scope.variables.values():
+            if variable.link is not None:
+                self._unlink(variable)
+            for child in list(variable.children):
+                self._unlink(child)
+
+    def _assign(self, s: ast.Assign, cx: _Context) -> Iterator[None]:
+        self._store(s.target, self._eval(s.value, cx), cx)
+        return iter(())
+
+    def _if(self, s: ast.If, cx: _Context) -> Iterator[None]:
+        if self._condition(s.condition, cx):
+            yield from self._exec(s.then, cx)
+        elif s.orelse is not None:
+            yield from self._exec(s.orelse, cx)
+
+    def _while(self, s: ast.While, cx: _Context) -> Iterator[None]:
+        while self._condition(s.condition, cx):
+            yield from self._exec(s.body, cx)
+
+    def _for(self, s: ast.For, cx: _Context) -> Iterator[None]:
+        # ALGOL 60 report 4.6.4.2: V := A; L1: if (V-C)*sign(B) > 0 goto done; S; V := V+B; goto L1
+        self._store(s.variable, self._scalar(s.start, cx, "the FOR start"), cx)
+        while True:
+            step = self._scalar(s.step, cx, "the FOR step")
+            limit = self._scalar(s.limit, cx, "the FOR limit")
+            current = self._counter(s, cx)
+            excess = self._arithmetic(s, "-", current, limit)
+            assert isinstance(excess, Scalar)
+            if excess.value * np.sign(step.value) > 0:
+                return
+            yield from self._exec(s.body, cx)
+            step = self._scalar(s.step, cx, "the FOR step")
+            current = self._counter(s, cx)
+            self._store(s.variable, self._arithmetic(s, "+", current, step), cx)
+
+    def _arithmetic(self, node: ast.Node, op: str, left: Value, right: Value) -> Value:
+        try:
+            return binary(op, left, right)
+        except OperandError as problem:
+            raise self._error(node, str(problem)) from None
+
+    def _counter(self, s: ast.For, cx: _Context) -> Scalar:
+        value = self._read(s.variable, cx)
+        if not isinstance(value, Scalar):
+            raise self._error(s.variable, f"the FOR variable holds {type_name(value)}")
+        return value
+
+    def _signal(self, s: ast.Signal, cx: _Context) -> Iterator[None]:
+        self._event(s.event, cx).count += 1
+        self._signals += 1
+        return iter(())
+
+    def _wait(self, s: ast.Wait, cx: _Context) -> Iterator[None]:
+        event = self._event(s.event, cx)
+        while event.count == 0:
+            self._blocked = s
+            yield
+        event.count -= 1
+
+    def _abort(self, s: ast.Abort, cx: _Context) -> Iterator[None]:
+        message = "".join(describe(self._eval(a, cx)) for a in s.args)
+        raise _Aborted(ALAbort(message, s.line, s.column))
+
+    def _stop(self, s: ast.Stop, cx: _Context) -> Iterator[None]:
+        motion = cx.motion
+        if motion is None:
+            raise self._error(s, "STOP outside a monitor body (ON ... DO STOP)")
+        if not motion.stopped and not motion.finished:
+            motion.stopped = True
+            self.machine.stop()
+            self._active = None
+            self._sync_hand(self.machine.hand_pose())
+        return iter(())
+
+    # ---- affixment statements
+
+    def _affix_stmt(self, s: ast.Affix, cx: _Context) -> Iterator[None]:
+        child = self._frame_variable(s.frame, cx)
+        parent = self._frame_variable(s.parent, cx)
+        relation = None
+        if s.at is not None:
+            value = self._eval(s.at, cx)
+            if not isinstance(value, Pose):
+                raise self._error(s.at, f"AFFIX ... AT needs a trans, not {type_name(value)}")
+            relation = value.se3
+        self._affix(child, parent, relation, s.rigid, s)
+        return iter(())
+
+    def _unfix(self, s: ast.Unfix, cx: _Context) -> Iterator[None]:
+        a = self._frame_variable(s.frame, cx)
+        b = self._frame_variable(s.parent, cx)
+        if a.link is not None and a.link.parent is b:
+            self._unlink(a)
+        elif b.link is not None and b.link.parent is a:
+            self._unlink(b)
+        else:
+            raise self._error(s, f"{a.name} is not affixed to {b.name}")
+        return iter(())
+
+    def _frame_variable(self, name: ast.Name, cx: _Context) -> _Variable:
+        variable = cx.scope.lookup(name.name)
+        if variable is None:
+            self._check_declarable(name.name, name)
+            variable = _Variable(name.name, "FRAME")
+            self._global.variables[name.name] = variable
+        if variable.type not in ("FRAME", "TRANS"):
+            raise self._error(name, f"{name.name} is a {variable.type.lower()}, not a frame")
+        return variable
+
+    def _affix(
+        self,
+        child: _Variable,
+        parent: _Variable,
+        relation: pin.SE3 | None,
+        rigid: bool,
+        node: ast.Node | None,
+    ) -> None:
+        if child.hand:
+            raise self._error(
+                node,
+                f"the hand {child.name} cannot be affixed to {parent.name}: its position is "
+                f"sensed (write AFFIX {parent.name} TO {child.name})",
+            )
+        ancestor: _Variable | None = parent
+        while ancestor is not None:
+            if ancestor is child:
+                raise self._error(node, f"affixing {child.name} to {parent.name} makes a cycle")
+            ancestor = ancestor.link.parent if ancestor.link is not None else None
+        if relation is None:
+            if child.pose is None or parent.pose is None:
+                missing = child.name if child.pose is None else parent.name
+                raise self._error(
+                    node, f"AFFIX without AT needs both values, and {missing} has none"
+                )
+            relation = _se3_of(parent.pose).inverse() * _se3_of(child.pose)
+        if child.link is not None:
+            self._unlink(child)
+        child.link = _Link(parent, pin.SE3(relation), rigid)
+        parent.children.append(child)
+        if parent.pose is not None:
+            child.value = Pose(_se3_of(parent.pose) * relation, _kind(child))
+            self._propagate(child, frozenset())
+
+    def _unlink(self, child: _Variable) -> None:
+        link = child.link
+        if link is None:
+            return
+        link.parent.children.remove(child)
+        child.link = None
+
+    def _set_pose(self, variable: _Variable, pose: pin.SE3, node: ast.Node | None) -> None:
+        """Assign a frame and update the affixment graph (module docstring, "Affixment")."""
+        chain = [(variable, pin.SE3(pose))]
+        top, top_pose = variable, chain[0][1]
+        while top.link is not None and top.link.rigid:
+            parent = top.link.parent
+            if parent.hand:
+                raise self._error(
+                    node,
+                    f"cannot assign {variable.name}: it is rigidly affixed to the hand "
+                    f"{parent.name}, whose position is sensed",
+                )
+            top_pose = top_pose * top.link.parent_from_child.inverse()
+            top = parent
+            chain.append((top, top_pose))
+        for v, p in chain:
+            v.value = Pose(p, _kind(v))
+        if top.link is not None and top.link.parent.pose is not None:
+            top.link.parent_from_child = _se3_of(top.link.parent.pose).inverse() * top_pose
+        self._propagate(top, frozenset(id(v) for v, _ in chain))
+
+    def _propagate(self, root: _Variable, fixed: frozenset[int]) -> None:
+        stack = [root]
+        while stack:
+            node = stack.pop()
+            if node.pose is None:
+                continue
+            for child in node.children:
+                assert child.link is not None
+                if id(child) not in fixed:
+                    se3 = _se3_of(node.pose) * child.link.parent_from_child
+                    child.value = Pose(se3, _kind(child))
+                stack.append(child)
+
+    def _sync_hand(self, pose: pin.SE3) -> None:
+        self._hand.value = Pose(pose, "frame")
+        self._propagate(self._hand, frozenset())
+
+    # ---- motion statements
+
+    def _move(self, s: ast.Move, cx: _Context) -> Iterator[None]:
+        moved = cx.scope.lookup(s.frame.name)
+        if moved is None or moved.type not in ("FRAME", "TRANS"):
+            raise self._error(s.frame, f"MOVE needs a frame, and {s.frame.name} is not one")
+        hand_from_frame = self._hand_from(moved, s)
+        points: list[tuple[ast.Expr, Value]] = [(s.destination, self._eval(s.destination, cx))]
+        points += [(p, self._eval(p, cx)) for p in s.via_points]
+        poses: list[pin.SE3] = []
+        for expr, value in points:
+            if not isinstance(value, Pose):
+                raise self._error(expr, f"a motion goes to a frame, not to {type_name(value)}")
+            poses.append(value.se3)
+        frame_from_hand = hand_from_frame.inverse()
+        targets = [p * frame_from_hand for p in (*poses[1:], poses[0])]
+        constraints = self._constraints(s, cx)
+        monitors, handlers, arrivals = self._monitors(s, cx)
+        yield from self._motion(
+            s,
+            cx,
+            lambda: self.machine.move(targets, monitors, constraints, s.line),
+            handlers,
+            arrivals,
+        )
+
+    def _hand_from(self, moved: _Variable, s: ast.Move) -> pin.SE3:
+        if moved.hand:
+            return pin.SE3.Identity()
+        node: _Variable | None = moved
+        while node is not None and not node.hand:
+            node = node.link.parent if node.link is not None else None
+        if node is None:
+            raise self._error(
+                s.frame,
+                f"cannot move {moved.name}: it is not affixed to the hand "
+                f"(AFFIX {moved.name} TO {self.hand_names[0]} first)",
+            )
+        if moved.pose is None:
+            raise self._error(s.frame, f"{moved.name} has no value")
+        return _se3_of(self._hand.pose).inverse() * _se3_of(moved.pose)
+
+    def _device(self, name: ast.Name) -> None:
+        if name.name not in self.hand_names:
+            shown = ", ".join(self.hand_names)
+            raise self._error(name, f"{name.name} is not a hand (the hand is {shown})")
+
+    def _open(self, s: ast.Open, cx: _Context) -> Iterator[None]:
+        self._device(s.device)
+        width = self._dimensioned(s.width, cx, LENGTH, "an opening")
+        constraints = self._constraints(s, cx)
+        monitors, handlers, arrivals = self._monitors(s, cx)
+        start = lambda: self.machine.open_hand(width, monitors, constraints, s.line)  # noqa: E731
+        yield from self._motion(s, cx, start, handlers, arrivals)
+
+    def _close(self, s: ast.Close, cx: _Context) -> Iterator[None]:
+        self._device(s.device)
+        width = None
+        if s.width is not None:
+            width = self._dimensioned(s.width, cx, LENGTH, "an opening")
+        constraints = self._constraints(s, cx)
+        monitors, handlers, arrivals = self._monitors(s, cx)
+        start = lambda: self.machine.close_hand(width, monitors, constraints, s.line)  # noqa: E731
+        yield from self._motion(s, cx, start, handlers, arrivals)
+
+    def _center(self, s: ast.Center, cx: _Context) -> Iterator[None]:
+        self._device(s.device)
+        constraints = self._constraints(s, cx)
+        monitors, handlers, arrivals = self._monitors(s, cx)
+        start = lambda: self.machine.center(monitors, constraints, s.line)  # noqa: E731
+        yield from self._motion(s, cx, start, handlers, arrivals)
+
+    def _motion(
+        self,
+        s: ast.Stmt,
+        cx: _Context,
+        start: Callable[[], MotionResult],
+        handlers: list[ast.Stmt],
+        arrivals: list[ast.Stmt],
+    ) -> Iterator[None]:
+        if self._active is not None:
+            raise self._error(
+                s, "a motion statement in a monitor body needs STOP first: the arm is still moving"
+            )
+        state = _MotionState()
+        result = start()
+        self._active = state
+        reported: set[int] = set()
+        try:
+            while True:
+                self._sync_hand(result.hand_pose)
+                if result.fired is None:
+                    break
+                index = result.fired
+                if index in reported or not 0 <= index < len(handlers):
+                    raise RuntimeError(
+                        f"the machine reported monitor {index} wrongly (line {s.line})"
+                    )
+                reported.add(index)
+                yield from self._exec(handlers[index], _Context(cx.scope, state))
+                if state.stopped:
+                    break
+                try:
+                    result = self.machine.resume()
+                except Exception:
+                    self._active = None  # the machine ended the motion by failing
+                    raise
+        except _Aborted:
+            self._release_machine()
+            raise
+        self._active = None
+        arrived = result.arrived and not state.stopped
+        state.finished = True
+        if arrived:
+            for body in arrivals:
+                yield from self._exec(body, _Context(cx.scope, state))
+
+    def _monitors(
+        self, s: ast.Move | ast.Open | ast.Close | ast.Center, cx: _Context
+    ) -> tuple[list[MonitorSpec], list[ast.Stmt], list[ast.Stmt]]:
+        monitors: list[MonitorSpec] = []
+        handlers: list[ast.Stmt] = []
+        arrivals: list[ast.Stmt] = []
+        for on in s.monitors:
+            condition = on.condition
+            if isinstance(condition, ast.Name) and condition.name == "ARRIVAL":
+                arrivals.append(on.body)
+                continue
+            monitors.append(self._monitor(condition, cx, on.line))
+            handlers.append(on.body)
+        return monitors, handlers, arrivals
+
+    def _monitor(self, condition: ast.Expr, cx: _Context, line: int) -> MonitorSpec:
+        if isinstance(condition, ast.Name):
+            self._event(condition, cx)
+            return EventMonitor(condition.name, line)
+        if isinstance(condition, ast.Compare) and len(condition.ops) == 1:
+            (left, right), relation = condition.operands, _relation(condition.ops[0])
+            if not _is_sensor(left) and _is_sensor(right):
+                left, right, relation = right, left, _FLIP[relation]
+            if isinstance(left, ast.Call) and left.func.name in _SENSORS:
+                direction = self._direction(left, cx)
+                if left.func.name == "FORCE":
+                    threshold = self._dimensioned(right, cx, FORCE, "a force threshold")
+                    return ForceMonitor(direction, relation, threshold, line)
+                threshold = self._dimensioned(right, cx, TORQUE, "a torque threshold")
+                return TorqueMonitor(direction, relation, threshold, line)
+            if isinstance(left, ast.Name) and left.name == "OPENING":
+                threshold = self._dimensioned(right, cx, LENGTH, "an opening threshold")
+                return OpeningMonitor(relation, threshold, line)
+            if isinstance(left, ast.Name) and left.name == "DURATION":
+                threshold = self._dimensioned(right, cx, TIME, "a duration")
+                return DurationMonitor(relation, threshold, line)
+        raise self._error(
+            condition,
+            "a monitor watches FORCE(v), TORQUE(v), OPENING or DURATION against a value, "
+            "an event, or ARRIVAL",
+        )
+
+    def _constraints(
+        self, s: ast.Move | ast.Open | ast.Close | ast.Center, cx: _Context
+    ) -> list[MotionConstraint]:
+        out: list[MotionConstraint] = []
+        targets = 0
+        previous: ast.Clause | None = None
+        for clause in s.clauses:
+            if isinstance(clause, ast.ViaClause):
+                targets += len(clause.points)
+            elif isinstance(clause, ast.WithClause):
+                segment = targets - 1 if isinstance(previous, ast.ViaClause) else None
+                out += [self._constraint(c, cx, segment) for c in clause.conditions]
+            previous = clause
+        return out
+
+    def _constraint(self, c: ast.Expr, cx: _Context, segment: int | None) -> MotionConstraint:
+        if isinstance(c, ast.Compare) and len(c.ops) == 1:
+            (left, right), relation = c.operands, _relation(c.ops[0])
+            if not _is_sensor(left) and _is_sensor(right):
+                left, right, relation = right, left, _FLIP[relation]
+            if isinstance(left, ast.Call) and left.func.name in _SENSORS and relation == "=":
+                direction = self._direction(left, cx)
+                if left.func.name == "FORCE":
+                    value = self._dimensioned(right, cx, FORCE, "a force")
+                    return ForceConstraint(direction, value, segment, c.line)
+                value = self._dimensioned(right, cx, TORQUE, "a torque")
+                return TorqueConstraint(direction, value, segment, c.line)
+            if isinstance(left, ast.Name) and left.name == "DURATION":
+                seconds = self._dimensioned(right, cx, TIME, "a duration")
+                return DurationConstraint(relation, seconds, segment, c.line)
+        raise self._error(c, "a WITH condition is FORCE(v) = f, TORQUE(v) = t or DURATION rel t")
+
+    def _direction(self, call: ast.Call, cx: _Context) -> tuple[float, float, float]:
+        """The world unit direction of FORCE(v)/TORQUE(v); ``frame*v`` uses the rotation only."""
+        if len(call.args) != 1:
+            raise self._error(call, f"{call.func.name} takes one direction vector")
+        (arg,) = call.args
+        value: Value
+        if isinstance(arg, ast.BinOp) and arg.op == "*":
+            left, right = self._eval(arg.left, cx), self._eval(arg.right, cx)
+            if isinstance(left, Pose) and isinstance(right, Vector):
+                value = Vector(left.se3.rotation @ right.value, right.dim)
+            else:
+                value = self._apply(arg, lambda: binary("*", left, right))
+        else:
+            value = self._eval(arg, cx)
+        if not isinstance(value, Vector):
+            raise self._error(arg, f"{call.func.name} needs a direction vector")
+        norm = float(np.linalg.norm(value.value))
+        if norm < 1e-12:
+            raise self._error(arg, f"{call.func.name} needs a non-zero direction")
+        x, y, z = (float(v) for v in value.value / norm)
+        return (x, y, z)
+
+    # ---- expressions
+
+    def _eval(self, e: ast.Expr, cx: _Context) -> Value:
+        method = _EXPRESSIONS.get(type(e))
+        if method is None:
+            raise self._error(e, f"cannot evaluate {type(e).__name__}")
+        return method(self, e, cx)
+
+    def _apply(self, node: ast.Node, fn: Callable[[], Any]) -> Any:
+        try:
+            return fn()
+        except OperandError as problem:
+            raise self._error(node, str(problem)) from None
+
+    def _number(self, e: ast.Number, cx: _Context) -> Value:
+        return Scalar(e.value)
+
+    def _string(self, e: ast.String, cx: _Context) -> Value:
+        return e.value
+
+    def _name(self, e: ast.Name, cx: _Context) -> Value:
+        return self._read(e, cx)
+
+    def _read(self, e: ast.Name, cx: _Context) -> Value:
+        variable = cx.scope.lookup(e.name)
+        if variable is not None:
+            if variable.value is None:
+                raise self._error(e, f"{e.name} has no value yet")
+            return variable.value
+        constant = CONSTANTS.get(e.name)
+        if constant is not None:
+            return constant
+        if e.name == "OPENING":
+            return Scalar(self.machine.opening(), LENGTH)
+        if e.name in ("ARRIVAL", "DURATION"):
+            raise self._error(e, f"{e.name} is only meaningful in an ON or WITH clause")
+        raise self._error(e, f"unknown name {e.name}")
+
+    def _call(self, e: ast.Call, cx: _Context) -> Value:
+        name = e.func.name
+        if name in _SENSORS:
+            direction = np.array(self._direction(e, cx))
+            if name == "FORCE":
+                return Scalar(self.machine.force(direction), FORCE)
+            return Scalar(self.machine.torque(direction), TORQUE)
+        args = [self._eval(a, cx) for a in e.args]
+        return self._apply(e, lambda: call_builtin(name, args))  # type: ignore[no-any-return]
+
+    def _unary(self, e: ast.UnaryOp, cx: _Context) -> Value:
+        operand = self._eval(e.operand, cx)
+        return self._apply(e, lambda: unary(e.op, operand))  # type: ignore[no-any-return]
+
+    def _binary(self, e: ast.BinOp, cx: _Context) -> Value:
+        left = self._eval(e.left, cx)
+        right = self._eval(e.right, cx)
+        return self._arithmetic(e, e.op, left, right)
+
+    def _compare(self, e: ast.Compare, cx: _Context) -> Value:
+        values = [self._eval(x, cx) for x in e.operands]
+        result = True
+        pairs = zip(itertools.pairwise(values), e.ops, e.conjuncts(), strict=True)
+        for (left, right), op, pair in pairs:
+            try:
+                held = compare(op, left, right)
+            except OperandError as problem:
+                raise self._error(pair, str(problem)) from None
+            result = result and held
+        return result
+
+    def _magnitude(self, e: ast.Magnitude, cx: _Context) -> Value:
+        operand = self._eval(e.operand, cx)
+        return self._apply(e, lambda: magnitude(operand))  # type: ignore[no-any-return]
+
+    def _assign_expr(self, e: ast.AssignExpr, cx: _Context) -> Value:
+        value = self._eval(e.value, cx)
+        self._store(e.target, value, cx)
+        return value
+
+    def _condition(self, e: ast.Expr, cx: _Context) -> bool:
+        value = self._eval(e, cx)
+        if not isinstance(value, bool):
+            raise self._error(e, f"a condition must be a boolean, not {type_name(value)}")
+        return value
+
+    def _scalar(self, e: ast.Expr, cx: _Context, what: str) -> Scalar:
+        value = self._eval(e, cx)
+        if not isinstance(value, Scalar):
+            raise self._error(e, f"{what} must be a scalar, not {type_name(value)}")
+        return value
+
+    def _dimensioned(self, e: ast.Expr, cx: _Context, dim: Dimension, what: str) -> float:
+        value = self._scalar(e, cx, what)
+        return self._apply(e, lambda: coerce(value, dim, what).value)  # type: ignore[no-any-return]
+
+    def _event(self, name: ast.Name, cx: _Context) -> Event:
+        variable = cx.scope.lookup(name.name)
+        if variable is None:
+            self._check_declarable(name.name, name)
+            variable = _Variable(name.name, "EVENT", Event(name.name))
+            self._global.variables[name.name] = variable
+        if not isinstance(variable.value, Event):
+            raise self._error(name, f"{name.name} is a {variable.type.lower()}, not an event")
+        return variable.value
+
+    # ---- storing
+
+    def _store(self, target: ast.Name, value: Value, cx: _Context) -> None:
+        variable = cx.scope.lookup(target.name)
+        if variable is None:
+            self._check_declarable(target.name, target)
+            kind = _type_of(value)
+            if kind == "EVENT":
+                raise self._error(target, "an event cannot be assigned")
+            variable = _Variable(target.name, kind)
+            self._global.variables[target.name] = variable
+        if variable.hand:
+            raise self._error(
+                target, f"{target.name} is the arm's sensed hand frame; move it with MOVE"
+            )
+        wanted = variable.type
+        if wanted in ("FRAME", "TRANS"):
+            if not isinstance(value, Pose):
+                raise self._error(
+                    target, f"cannot assign {type_name(value)} to {wanted.lower()} {target.name}"
+                )
+            self._set_pose(variable, value.se3, target)
+            return
+        if _type_of(value) != wanted:
+            raise self._error(
+                target, f"cannot assign {type_name(value)} to {wanted.lower()} {target.name}"
+            )
+        variable.value = value
+
+
+# --------------------------------------------------------------------------------------------
+# Helpers and dispatch tables
+
+
+def _kind(variable: _Variable) -> PoseKind:
+    return "trans" if variable.type == "TRANS" else "frame"
+
+
+def _type_of(value: Value) -> str:
+    name = type_name(value)
+    return {"boolean": "BOOLEAN", "rot": "ROT"}.get(name, name.upper())
+
+
+def _relation(op: str) -> Relation:
+    if op not in _FLIP:
+        raise ValueError(f"unknown relation {op!r}")
+    return cast(Relation, op)
+
+
+def _is_sensor(e: ast.Expr) -> bool:
+    if isinstance(e, ast.Call):
+        return e.func.name in _SENSORS
+    return isinstance(e, ast.Name) and e.name in ("OPENING", "DURATION")
+
+
+_Statement = Callable[[Interpreter, Any, _Context], Iterator[None]]
+_Expression = Callable[[Interpreter, Any, _Context], Value]
+
+_STATEMENTS: dict[type, _Statement] = {
+    ast.Block: Interpreter._block,
+    ast.Cobegin: Interpreter._cobegin,
+    ast.Declaration: Interpreter._declaration,
+    ast.Assign: Interpreter._assign,
+    ast.Move: Interpreter._move,
+    ast.Open: Interpreter._open,
+    ast.Close: Interpreter._close,
+    ast.Center: Interpreter._center,
+    ast.Affix: Interpreter._affix_stmt,
+    ast.Unfix: Interpreter._unfix,
+    ast.If: Interpreter._if,
+    ast.While: Interpreter._while,
+    ast.For: Interpreter._for,
+    ast.Signal: Interpreter._signal,
+    ast.Wait: Interpreter._wait,
+    ast.Abort: Interpreter._abort,
+    ast.Stop: Interpreter._stop,
+}
+
+_EXPRESSIONS: dict[type, _Expression] = {
+    ast.Number: Interpreter._number,
+    ast.String: Interpreter._string,
+    ast.Name: Interpreter._name,
+    ast.Call: Interpreter._call,
+    ast.UnaryOp: Interpreter._unary,
+    ast.BinOp: Interpreter._binary,
+    ast.Compare: Interpreter._compare,
+    ast.Magnitude: Interpreter._magnitude,
+    ast.AssignExpr: Interpreter._assign_expr,
+}
+
+
+def run_program(
+    program: ast.Program, machine: Machine, *, hand_names: Sequence[str] = HAND_NAMES
+) -> tuple[RunResult, Interpreter]:
+    """Run ``program`` on ``machine`` in a fresh interpreter; returns the outcome and it."""
+    interpreter = Interpreter(machine, hand_names=hand_names)
+    return interpreter.run(program), interpreter
