@@ -249,3 +249,22 @@ def test_seed_task_fixture_names_the_stanford_arm():
     park = pin.SE3(pin.utils.rotate("y", np.pi), np.array([43.5, 56.9, 10.7]) * CM)
     assert arm.inverse(park)
     assert arm.name == "stanford" and arm.nq == 6
+
+
+def test_tool_offset_and_rate_overrides_from_the_task_spec():
+    spec = ArmSpec(
+        model="stanford",
+        base={"translation": ["0 cm", "0 cm", "0 cm"]},
+        tool_offset={"translation": ["0 cm", "0 cm", "2 cm"], "rotation": [{"z": "90 deg"}]},
+        velocity_limits=["1 rad/s", "1 rad/s", "25 cm/s", "1 rad/s", "1 rad/s", "1 rad/s"],
+    )
+    arm = load_arm(spec)
+    assert np.allclose(arm.limits.velocity, [1, 1, 0.25, 1, 1, 1])
+    assert np.allclose(arm.limits.acceleration, P.limits.acceleration)
+    q = np.array([0.2, -1.4, 0.5, 0.3, 0.8, -0.6])
+    # Hand frame = Paul's T6 (eqs. 2–13) · trans(rot(z, 90°), (0, 0, 2 cm)).
+    t6 = np.vstack([seed_forward(q), [0, 0, 0, 1]])
+    offset = pin.SE3(pin.utils.rotate("z", math.pi / 2), np.array([0, 0, 0.02]))
+    assert np.allclose(arm.forward(q).homogeneous, t6 @ offset.homogeneous, atol=1e-14)
+    solutions = arm.inverse(arm.forward(q))
+    assert min(float(np.max(np.abs(s - q))) for s in solutions) < 1e-9

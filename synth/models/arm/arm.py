@@ -23,7 +23,7 @@ ClosedFormInverse = Callable[[pin.SE3], list[NDArray[np.float64]]]
 """T_world_hand ↦ every attainable configuration (empty when none)."""
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class Arm:
     """A manipulator ready for kinematics and collision checking.
 
@@ -52,6 +52,10 @@ class Arm:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "_data", self.model.createData())
+
+    def __repr__(self) -> str:
+        kind = "closed form" if self.closed_form is not None else "DLS"
+        return f"Arm({self.name!r}, {self.nq} joints, {len(self.bodies)} bodies, inverse: {kind})"
 
     @property
     def nq(self) -> int:

@@ -22,7 +22,7 @@ pin, the pin in its hole — and remove exactly those pairs; nothing else is exe
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any, Literal, TypeAlias, cast
 
@@ -144,9 +144,7 @@ class CollisionScene:
             raise ArmModelError(
                 f"finger opening {self.opening} m outside [0, {arm.hand.max_opening}] m"
             )
-        self.environment: tuple[Obstacle, ...] = tuple(
-            item if isinstance(item, Obstacle) else Obstacle.of(*item) for item in environment
-        )
+        self.environment: tuple[Obstacle, ...] = environment_from(environment)
         self.held = held
         self.bodies: tuple[Body, ...] = tuple(self._bodies())
         names = [b.name for b in self.bodies]
@@ -359,6 +357,6 @@ class CollisionScene:
         }
 
 
-def environment_from(items: Sequence[EnvironmentItem]) -> tuple[Obstacle, ...]:
+def environment_from(items: Iterable[EnvironmentItem]) -> tuple[Obstacle, ...]:
     """Normalise (name, geometry, pose) tuples and obstacles into obstacles."""
     return tuple(item if isinstance(item, Obstacle) else Obstacle.of(*item) for item in items)
