@@ -12,13 +12,11 @@ from __future__ import annotations
 
 import argparse
 import math
-import statistics
-import time
-from collections.abc import Callable
 
 import coal
 import numpy as np
 import pinocchio as pin
+from _timing import per_call_us
 
 from synth.models.arm import (
     Arm,
@@ -33,17 +31,6 @@ from synth.models.arm import (
     swept_segment,
 )
 from synth.models.spec import ArmSpec, HandSpec
-
-
-def per_call_us(fn: Callable[[], object], repeat: int) -> float:
-    """Median wall time of ``fn`` over ``repeat`` runs [µs]."""
-    fn()
-    samples = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        samples.append(time.perf_counter() - t0)
-    return statistics.median(samples) * 1e6
 
 
 def environment(plate_x: float) -> list[tuple[str, coal.CollisionGeometry, pin.SE3]]:

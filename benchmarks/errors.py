@@ -8,12 +8,10 @@ objective). The objectives are the seed's A.2 functionals Δx, Δy, Δz of hole�
 from __future__ import annotations
 
 import argparse
-import statistics
-import time
-from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+from _timing import per_call_us
 
 from synth.errors.bounds import build_error_lp, closed_form_bound, solve_error_lp
 from synth.errors.chain import chain_between
@@ -22,17 +20,6 @@ from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
 
 ROOT = Path(__file__).resolve().parent.parent
-
-
-def per_call_us(fn: Callable[[], object], repeat: int) -> float:
-    """Median wall time of ``fn`` over ``repeat`` runs [µs]."""
-    fn()  # warm caches (solver import, numpy dispatch)
-    samples = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        samples.append(time.perf_counter() - t0)
-    return statistics.median(samples) * 1e6
 
 
 def main() -> None:
