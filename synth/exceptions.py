@@ -167,3 +167,18 @@ class ALRuntimeError(SynthError):
         self.problem = problem
         self.filename = filename
         super().__init__(f"{filename}:{line}:{column}: {problem}")
+
+
+class CodegenError(SynthError):
+    """A strategy record cannot be written as a program.
+
+    ``field`` names the record field at fault (``pin``, ``pickup.grasp_point.base``,
+    ``tap``); ``problem`` says what is wrong with it (a name that is not a valid AL identifier,
+    a motion that would have to be split across a stop-on-force clause, a non-finite number).
+    The message is one line: ``field: problem``.
+    """
+
+    def __init__(self, field: str, problem: str) -> None:
+        self.field = field
+        self.problem = problem
+        super().__init__(f"{field}: {problem}")

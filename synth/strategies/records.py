@@ -213,6 +213,12 @@ class PinInHoleStrategy:
     above the hole. ``success_threshold`` [m] is the ``DISTANCE_OFF`` test of the generated
     program and ``force_threshold`` [N] the guarded moves' stop force. Times in [s]:
     ``ttime`` (pickup + transport), ``finetime`` (tap + search), ``goodness`` = their sum.
+
+    After the insertion (seed L2839–2844): ``fingers`` is the AL name of the hand device that
+    ``OPEN`` drives (``BHAND``; ``hand`` is the arm frame, ``BMANIP``); ``release_opening`` [m]
+    the opening to let go (None: the pickup's approach opening, as the seed does) and
+    ``retreat`` where the hand goes to get clear (None: 2 in back along its own z). Read them
+    through :attr:`let_go_opening` and :attr:`get_clear`.
     """
 
     pin: str
@@ -237,11 +243,36 @@ class PinInHoleStrategy:
     search: Search | None = None
     preliminaries: tuple[str, ...] = ()
     name: str = ""
+    fingers: str = "BHAND"
+    release_opening: float | None = None
+    retreat: Destination | None = None
 
     @property
     def goodness(self) -> float:
         """Expected total time [s]: ``ttime + finetime`` (seed L1888)."""
         return self.ttime + self.finetime
+
+    @property
+    def let_go_opening(self) -> float:
+        """Opening [m] to let go of the pin (seed L2840: ``OPEN BHAND TO 2.98``).
+
+        ``release_opening`` when set, else the pickup's approach opening, as the seed does.
+        """
+        if self.release_opening is not None:
+            return self.release_opening
+        return self.pickup.approach_opening
+
+    @property
+    def get_clear(self) -> Destination:
+        """Where the hand goes after letting go (seed L2844).
+
+        ``retreat`` when set, else the seed's ``BMANIP*TRANS(NILROTN,VECTOR(0,0,-5.08))``:
+        the hand 2 in [0.0508 m] back along its own approach axis, relative to where it is.
+        """
+        if self.retreat is not None:
+            return self.retreat
+        back = pin.SE3(np.eye(3), np.array([0.0, 0.0, -RETREAT_DISTANCE]))
+        return Destination("get clear", self.hand, self.hand, back)
 
     @property
     def refined(self) -> bool:
@@ -278,6 +309,8 @@ class PinInHoleStrategy:
             },
             "success_threshold": self.success_threshold,
             "force_threshold": self.force_threshold,
+            "let_go_opening": self.let_go_opening,
+            "get_clear": self.get_clear.to_json(),
         }
 
 
@@ -327,3 +360,5 @@ class PlanResult:
 
 DEG = math.pi / 180.0
 INCH = 0.0254
+RETREAT_DISTANCE = 2 * INCH
+"""How far the hand backs off after letting go when the record names no retreat [m] (L2844)."""
