@@ -18,6 +18,7 @@ from pydantic import ValidationError
 from scipy.optimize import linprog
 
 from synth.exceptions import SpecError
+from synth.models.features import check_contacts
 from synth.models.spec import PARAMS, WORLD, TaskSpec, Uncertainty
 
 PathKey = tuple[str | int, ...]
@@ -121,6 +122,8 @@ def check_task(spec: TaskSpec, lines: dict[PathKey, int] | None = None) -> None:
             elif frame.shape is None or frame.shape.type != want:
                 fail(("insertion", field), f"{ref!r} is not a {want}")
 
+    check_contacts(spec, fail)  # contacts section: features exist, pairs and parents make sense
+
 
 def _check_feasible(unc: Uncertainty, loc: PathKey, fail: Any) -> None:
     """Fail if the block's bounds and coupled constraints admit no parameter vector (LP)."""
@@ -167,7 +170,7 @@ def _strip_union_tags(loc: tuple[Any, ...]) -> PathKey:
     for part in loc:
         if (
             isinstance(part, str)
-            and ("[" in part or part in ("box", "pin", "hole", "surface"))
+            and ("[" in part or part in ("box", "pin", "hole", "surface", "fixture"))
             and out
             and out[-1] == "shape"
         ):

@@ -24,6 +24,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
 
 from synth.al.names import al_name_problem
+from synth.models.contacts import ContactSpec
 from synth.units import parse_quantity, registry
 
 WORLD = "world"
@@ -317,9 +318,26 @@ class SurfaceShape(_Model):
         return v
 
 
-Shape = Annotated[BoxShape | PinShape | HoleShape | SurfaceShape, Field(discriminator="type")]
+class FixtureShape(_Model):
+    """An open-topped box (seed A.1, Figure A.1): a cavity with a floor and four side walls.
 
-OBJECT_SHAPES = frozenset({"box", "pin"})
+    Frame origin at the centre of the inside floor, z up into the cavity. ``inside`` is the
+    cavity (x, y, depth); ``wall`` and ``floor`` are the material thicknesses. Its named faces
+    (``floor``, inner walls ``xpos`` … ``yneg``, underside ``bottom``), edges and corners are
+    listed in :mod:`synth.models.features`.
+    """
+
+    type: Literal["fixture"]
+    inside: tuple[PositiveLength, PositiveLength, PositiveLength]
+    wall: PositiveLength
+    floor: PositiveLength
+
+
+Shape = Annotated[
+    BoxShape | PinShape | HoleShape | SurfaceShape | FixtureShape, Field(discriminator="type")
+]
+
+OBJECT_SHAPES = frozenset({"box", "pin", "fixture"})
 FEATURE_SHAPES = frozenset({"hole", "surface"})
 
 
@@ -475,13 +493,14 @@ class ManipulatorSpec(_Model):
 
 
 class TaskSpec(_Model):
-    """A whole task: frame tree, insertion and manipulator."""
+    """A whole task: frame tree, insertion, manipulator and contacts."""
 
     name: str
     description: str = ""
     frames: tuple[FrameSpec, ...]
     insertion: InsertionSpec | None = None
     manipulator: ManipulatorSpec | None = None
+    contacts: tuple[ContactSpec, ...] = ()
 
     @field_validator("frames")
     @classmethod
