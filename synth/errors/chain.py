@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from synth.errors.locate import located_graph
 from synth.errors.parameters import ParameterBlock, ParameterSpace
 from synth.errors.taylor import PoseModel, TaylorModel
 from synth.models.graph import AttributeGraph, Link
@@ -159,8 +160,11 @@ def chain_between(graph: AttributeGraph, start: str, end: str) -> ErrorChain:
     """The chain for ``start⁻¹ ∘ end`` through the frame tree, one block per uncertain link.
 
     ``start⁻¹ ∘ ancestor = ∏ (N_k E_k)⁻¹`` over the links from ``start`` upwards, then
-    ``ancestor⁻¹ ∘ end = ∏ N_k E_k`` down to ``end`` (seed A.2, L3215).
+    ``ancestor⁻¹ ∘ end = ∏ N_k E_k`` down to ``end`` (seed A.2, L3215). Links of objects
+    located by contacts (seed A.1) take their derived pose and block: the extension point is
+    :func:`synth.errors.locate.located_graph`, which returns ``graph`` itself otherwise.
     """
+    graph = located_graph(graph, start, end)
     path = graph.path(start, end)
     blocks: list[ParameterBlock] = []
     terms: list[Term] = []
