@@ -53,34 +53,6 @@ def _cmd_locate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cmd_serve(args: argparse.Namespace) -> int:
-    from server.serve import serve
-
-    return serve(args.host, args.port, args.db, args.token, args.model_dir or ())
-
-
-def _cmd_plan(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
-    from synth.models.loader import load_task
-    from synth.report import plan_summary
-    from synth.strategies import plan_task
-
-    spec = load_task(args.task)
-    result = plan_task(
-        spec,
-        try_harder=args.try_harder,
-        exhaustive=args.exhaustive,
-        base_dir=Path(args.task).resolve().parent,
-    )
-    document = result.to_json()  # the --json shape; a "program" key can join it here
-    if args.json:
-        print(json.dumps(document, indent=2))
-    else:
-        print(plan_summary(result))
-    return 0
-
-
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``synth`` command."""
     parser = argparse.ArgumentParser(
@@ -102,21 +74,6 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print JSON (SI units)")
     p.set_defaults(func=_cmd_errors)
 
-    p = sub.add_parser("plan", help="choose a pin-in-hole strategy (seed ch. IV §4.1–4.6)")
-    p.add_argument("task", help="task specification (YAML) with insertion and manipulator")
-    p.add_argument("--json", action="store_true", help="print JSON (SI units)")
-    p.add_argument(
-        "--try-harder",
-        action="store_true",
-        help="keep every grasp orientation ω with an arm solution, not the best three",
-    )
-    p.add_argument(
-        "--exhaustive",
-        action="store_true",
-        help="refine every candidate instead of stopping at the best-first cutoff",
-    )
-    p.set_defaults(func=_cmd_plan)
-
     p = sub.add_parser("locate", help="derive object locations from their contacts (seed A.1)")
     p.add_argument("task", help="task specification (YAML) with a contacts section")
     p.add_argument("--json", action="store_true", help="print JSON (SI units)")
@@ -131,19 +88,6 @@ def build_parser() -> argparse.ArgumentParser:
         help="bound each estimate with one relaxation, as the seed's printed figures",
     )
     p.set_defaults(func=_cmd_locate)
-
-    p = sub.add_parser("serve", help="run the HTTP service (docs/api.md)")
-    p.add_argument("--host", default="127.0.0.1", help="address to bind (default: 127.0.0.1)")
-    p.add_argument("--port", type=int, default=8000, help="port (default: 8000; 0: any free)")
-    p.add_argument("--db", metavar="PATH|URL", help="SQLite file or SQLAlchemy URL ($SYNTH_DB)")
-    p.add_argument("--token", help="bearer token required for writes ($SYNTH_TOKEN)")
-    p.add_argument(
-        "--model-dir",
-        action="append",
-        metavar="DIR",
-        help="directory task URDFs may come from; repeatable ($SYNTH_MODEL_DIRS)",
-    )
-    p.set_defaults(func=_cmd_serve)
     return parser
 
 
