@@ -1,0 +1,77 @@
+"""FastAPI dependencies and their ``Annotated`` aliases: settings, the service, access rules.
+
+Access rule: when a token is configured, every write (``POST``) needs
+``Authorization: Bearer TOKEN``; reads (``GET /v1/...``) are open unless ``protect_reads`` is
+set, and ``/healthz`` is always open. Without a token everything is open (bind to loopback).
+"""
+
+from __future__ import annotations
+
+import hmac
+from typing import Annotated
+
+from fastapi import Depends, FastAPI, Request
+from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
+
+from server.exceptions import Unauthorized
+from server.service import PlanService
+from server.settings import Settings, get_settings
+
+SettingsDep = Annotated[Settings, Depends(get_settings)]
+
+_bearer = HTTPBearer(auto_error=False, description="the server's token (--token / SYNTH_TOKEN)")
+Credentials = Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)]
+
+
+def current_settings(app: FastAPI) -> Settings:
+    """The settings routes see, honouring ``app.dependency_overrides`` (for middleware)."""
+    provider = app.dependency_overrides.get(get_settings, get_settings)
+    settings = provider()
+    assert isinstance(settings, Settings)
+    return settings
+
+
+def get_service(request: Request) -> PlanService:
+    """The app's :class:`PlanService` (built at startup)."""
+    service = request.app.state.service
+    assert isinstance(service, PlanService)
+    return service
+
+
+ServiceDep = Annotated[PlanService, Depends(get_service)]
+
+
+def _check(settings: Settings, credentials: HTTPAuthorizationCredentials | None) -> None:
+    if settings.token is None:
+        return
+    if credentials is None:
+        raise Unauthorized("this endpoint needs 'Authorization: Bearer <token>'")
+    if not hmac.compare_digest(credentials.credentials.encode(), settings.token.encode()):
+        raise Unauthorized("the bearer token is not valid")
+
+
+def require_writer(settings: SettingsDep, credentials: Credentials) -> None:
+    """Writes need the token whenever one is configured."""
+    _check(settings, credentials)
+
+
+def require_reader(settings: SettingsDep, credentials: Credentials) -> None:
+    """Reads need the token only when ``protect_reads`` is set."""
+    if settings.protect_reads:
+        _check(settings, credentials)
+
+
+Writer = Depends(require_writer)
+Reader = Depends(require_reader)
+
+__all__ = [
+    "Credentials",
+    "Reader",
+    "ServiceDep",
+    "SettingsDep",
+    "Writer",
+    "current_settings",
+    "get_service",
+    "require_reader",
+    "require_writer",
+]

@@ -1,0 +1,113 @@
+"""The server's own failures (not the task's), as exceptions with an HTTP status.
+
+Free of FastAPI so worker processes can raise and ship them; :mod:`server.errors` maps them
+(and synth's exceptions) to responses.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+
+class ApiError(Exception):
+    """A failure of the service itself (not of the task): status, title, detail, extras."""
+
+    status = 500
+    title = "Internal error"
+    headers: ClassVar[Mapping[str, str]] = {}
+
+    def __init__(self, detail: str, **extra: Any) -> None:
+        super().__init__(detail)
+        self.detail = detail
+        self.extra = extra
+
+
+class InvalidRequest(ApiError):
+    """A request option out of the server's bounds (e.g. more trials than it allows)."""
+
+    status = 422
+    title = "Invalid request"
+
+
+class Unauthorized(ApiError):
+    """A write (or protected read) without the configured bearer token."""
+
+    status = 401
+    title = "Unauthorized"
+    headers: ClassVar[Mapping[str, str]] = {"WWW-Authenticate": "Bearer"}
+
+
+class NotFound(ApiError):
+    """No plan with that id."""
+
+    status = 404
+    title = "Not found"
+
+
+class PayloadTooLarge(ApiError):
+    """The request body is over the configured limit."""
+
+    status = 413
+    title = "Request body too large"
+
+
+class UnsupportedMediaType(ApiError):
+    """A body in a media type the endpoint does not read."""
+
+    status = 415
+    title = "Unsupported media type"
+
+
+class ServiceBusy(ApiError):
+    """No worker became free within the time budget (or none could be started)."""
+
+    status = 503
+    title = "Service busy"
+    headers: ClassVar[Mapping[str, str]] = {"Retry-After": "5"}
+
+
+class StageUnavailable(ApiError):
+    """A synth stage (planner, codegen) is missing from this build, so the job cannot run."""
+
+    status = 503
+    title = "Not available in this build"
+
+
+class ReplayUnavailable(StageUnavailable):
+    """No replay (``synth.replay``) in this build, so programs cannot be validated."""
+
+    title = "Replay not available"
+
+
+class TimeBudgetExceeded(ApiError):
+    """A planning or replay job ran past the time budget; its worker was stopped."""
+
+    status = 504
+    title = "Time budget exceeded"
+
+
+class WorkerFailed(RuntimeError):
+    """A worker process died or a job failed with a non-synth exception: a bug, answered 500.
+
+    ``remote_traceback`` is the worker's traceback (logged, never sent to the client).
+    """
+
+    def __init__(self, message: str, remote_traceback: str = "") -> None:
+        super().__init__(message)
+        self.remote_traceback = remote_traceback
+
+
+__all__ = [
+    "ApiError",
+    "InvalidRequest",
+    "NotFound",
+    "PayloadTooLarge",
+    "ReplayUnavailable",
+    "ServiceBusy",
+    "StageUnavailable",
+    "TimeBudgetExceeded",
+    "Unauthorized",
+    "UnsupportedMediaType",
+    "WorkerFailed",
+]

@@ -1,0 +1,66 @@
+"""The FastAPI application: :func:`create_app` composes settings, routers, limits and errors.
+
+``synth serve`` runs ``create_app(settings)`` under uvicorn. At startup the app opens the
+database (creating tables) and starts the worker processes; at shutdown it stops them.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+
+from fastapi import FastAPI
+
+import synth
+from server import service
+from server.db import PlanStore
+from server.deps import current_settings
+from server.errors import install_error_handlers
+from server.limits import BodyLimitMiddleware
+from server.routers import health, plans, replays
+from server.settings import Settings, get_settings
+from server.workers import WorkerPool
+
+DESCRIPTION = """\
+Submit a pin-in-hole task spec; get an AL program planned after R. H. Taylor (1976),
+validated by replaying it on a simulated arm. See `docs/api.md` for the access rule, limits
+and curl examples. Errors are RFC 9457 problem documents (`application/problem+json`).
+"""
+
+
+def create_app(settings: Settings | None = None) -> FastAPI:
+    """The service configured by ``settings`` (default: :func:`get_settings`, the environment)."""
+    settings = settings if settings is not None else get_settings()
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        store = PlanStore(settings.db_url)
+        await asyncio.to_thread(store.create_schema)
+        pool = WorkerPool(settings.workers, warmup="server.service:warm_up")
+        await pool.start()
+        app.state.service = service.PlanService(store, pool)
+        try:
+            yield
+        finally:
+            await pool.close()
+            store.close()
+
+    app = FastAPI(
+        title="synth",
+        version=synth.__version__,
+        description=DESCRIPTION,
+        lifespan=lifespan,
+    )
+    app.dependency_overrides[get_settings] = lambda: settings
+    install_error_handlers(app)
+    app.add_middleware(
+        BodyLimitMiddleware, limit=lambda _scope: current_settings(app).max_body_bytes
+    )
+    app.include_router(health.router)
+    app.include_router(plans.router)
+    app.include_router(replays.router)
+    return app
+
+
+__all__ = ["create_app"]

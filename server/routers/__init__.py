@@ -1,0 +1,1 @@
+"""The API's routers, composed by :func:`server.main.create_app`."""

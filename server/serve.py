@@ -1,0 +1,46 @@
+"""``synth serve``: settings from the environment, overridden by flags, run under uvicorn."""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Sequence
+
+from server.settings import settings_from_env
+
+
+def serve(
+    host: str = "127.0.0.1",
+    port: int = 8000,
+    db: str | None = None,
+    token: str | None = None,
+    model_dirs: Sequence[str] = (),
+) -> int:
+    """Run the service until interrupted; 2 on a configuration error (like any CLI error)."""
+    import uvicorn
+
+    from server.main import create_app
+
+    try:
+        settings = settings_from_env()
+        changes: dict[str, object] = {}
+        if db is not None:
+            changes["db_url"] = db
+        if token is not None:
+            changes["token"] = token
+        if model_dirs:
+            changes["model_dirs"] = tuple(model_dirs)
+        settings = settings.with_(**changes)
+    except ValueError as exc:
+        print(f"synth serve: error: {exc}", file=sys.stderr)
+        return 2
+    if settings.token is None and host not in ("127.0.0.1", "localhost", "::1"):
+        print(
+            f"synth serve: warning: no token set and listening on {host}: anyone who can reach "
+            "it can submit work (set --token or SYNTH_TOKEN)",
+            file=sys.stderr,
+        )
+    uvicorn.run(create_app(settings), host=host, port=port, log_level="info")
+    return 0
+
+
+__all__ = ["serve"]

@@ -1,0 +1,301 @@
+"""Worker processes that run planning and replay jobs under a wall-clock budget.
+
+Planning is CPU-bound pure Python/C++ with no way to interrupt it from outside, so a thread
+that overruns its budget could only be abandoned, still burning a core. Each job therefore runs
+in one of ``size`` long-lived worker processes (with synth imported once); a job that
+overruns is answered with :class:`~server.errors.TimeBudgetExceeded` and its worker is killed
+and replaced. The event loop never blocks: it waits on the worker's pipe with ``add_reader``.
+
+A job is a picklable top-level callable and its arguments. A :class:`~synth.exceptions.SynthError`
+raised in a worker is rebuilt in the server as the same class with the same fields, so the one
+error handler maps it; any other exception comes back as :class:`~server.errors.WorkerFailed`
+(a bug: 500, traceback logged).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import ctypes
+import importlib
+import logging
+import os
+import pickle
+import signal
+import socket
+import subprocess
+import sys
+import time
+import traceback
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from multiprocessing.connection import Connection
+from typing import Any
+
+from server.exceptions import ApiError, ServiceBusy, TimeBudgetExceeded, WorkerFailed
+from synth.exceptions import SynthError
+
+log = logging.getLogger("server.workers")
+
+STARTUP_TIMEOUT = 120.0  # [s] a worker's imports and warm-up
+
+
+def _die_with_parent() -> None:
+    """Ask Linux to SIGKILL this process when its parent dies (best effort elsewhere)."""
+    if not sys.platform.startswith("linux"):
+        return
+    with contextlib.suppress(Exception):
+        libc = ctypes.CDLL("libc.so.6", use_errno=True)
+        libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+
+
+def _pack_synth_error(exc: SynthError) -> tuple[str, str, str, dict[str, Any]]:
+    state: dict[str, Any] = {}
+    for key, value in vars(exc).items():
+        try:
+            pickle.dumps(value)
+            state[key] = value
+        except Exception:
+            state[key] = repr(value)
+    return type(exc).__module__, type(exc).__qualname__, str(exc), state
+
+
+def _unpack_synth_error(module: str, qualname: str, message: str, state: dict[str, Any]) -> Any:
+    if not module.startswith("synth."):
+        return WorkerFailed(f"worker raised an unexpected error type {module}.{qualname}")
+    cls: Any = importlib.import_module(module)
+    for part in qualname.split("."):
+        cls = getattr(cls, part)
+    if not (isinstance(cls, type) and issubclass(cls, SynthError)):
+        return WorkerFailed(f"worker raised {module}.{qualname}, not a SynthError")
+    exc = cls.__new__(cls)
+    Exception.__init__(exc, message)
+    exc.__dict__.update(state)
+    return exc
+
+
+def _worker_main(conn: Connection, warmup: str) -> None:
+    """Loop of a worker process: ``(fn, args)`` in, ``("ok", value)`` or an error out."""
+    _die_with_parent()
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the server decides when workers stop
+    info: dict[str, Any] = {}
+    if warmup:
+        module, _, name = warmup.partition(":")
+        info = getattr(importlib.import_module(module), name)()
+    conn.send(("ready", os.getpid(), info))
+    while True:
+        try:
+            message = conn.recv()
+        except (EOFError, OSError):
+            return
+        if message is None:
+            return
+        fn, args = message
+        reply: tuple[Any, ...]
+        try:
+            reply = ("ok", fn(*args))
+        except SynthError as exc:
+            reply = ("synth_error", *_pack_synth_error(exc))
+        except ApiError as exc:  # e.g. ReplayUnavailable: picklable as it is
+            reply = ("api_error", exc)
+        except BaseException as exc:
+            reply = ("bug", f"{type(exc).__name__}: {exc}", traceback.format_exc())
+        try:
+            conn.send(reply)
+        except Exception as exc:  # an unpicklable result is a bug in the job
+            conn.send(("bug", f"cannot send the job's result: {exc}", traceback.format_exc()))
+
+
+@dataclass(eq=False)
+class _Worker:
+    process: subprocess.Popen[bytes]
+    conn: Connection
+    started: float = field(default_factory=time.monotonic)
+
+
+class WorkerPool:
+    """``size`` worker processes; :meth:`run` executes one job on a free one within a budget.
+
+    Workers are fresh interpreters (``python -m server.workers FD WARMUP``) talking over a
+    socket pair, so they never re-import the server's ``__main__``. ``warmup`` names a
+    ``module:function`` each worker calls once before its first job; its result (a dict) is
+    kept in :attr:`info`.
+    """
+
+    def __init__(self, size: int, warmup: str = "") -> None:
+        self.size = size
+        self.warmup = warmup
+        self.info: dict[str, Any] = {}
+        self._free: asyncio.Queue[_Worker] = asyncio.Queue()
+        self._all: set[_Worker] = set()
+        self._tasks: set[asyncio.Task[None]] = set()
+        self._closed = False
+        self._failed_starts = 0
+        self.jobs_run = 0
+        self.jobs_killed = 0
+
+    # -- lifecycle ------------------------------------------------------------------------
+
+    async def start(self) -> None:
+        """Start the workers; each joins the free queue once its warm-up is done."""
+        for _ in range(self.size):
+            self._spawn()
+
+    def _spawn(self) -> None:
+        if self._closed:
+            return
+        parent, child = socket.socketpair()
+        with child:
+            process = subprocess.Popen(
+                [sys.executable, "-m", "server.workers", str(child.fileno()), self.warmup],
+                pass_fds=(child.fileno(),),
+                stdin=subprocess.DEVNULL,
+                start_new_session=False,
+            )
+        worker = _Worker(process, Connection(parent.detach()))
+        self._all.add(worker)
+        task = asyncio.get_running_loop().create_task(self._await_ready(worker))
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+
+    async def _await_ready(self, worker: _Worker) -> None:
+        try:
+            ready = await self._readable(worker.conn, STARTUP_TIMEOUT)
+            message = await asyncio.to_thread(worker.conn.recv) if ready else None
+        except (EOFError, OSError):
+            message = None
+        if isinstance(message, tuple) and message[:1] == ("ready",):
+            self.info = dict(message[2])
+            self._failed_starts = 0
+            if self._closed:
+                self._stop(worker)
+            else:
+                self._free.put_nowait(worker)
+            return
+        self._failed_starts += 1
+        delay = min(30.0, 2.0 ** min(self._failed_starts, 5))
+        log.error("worker %s failed to start; retrying in %g s", worker.process.pid, delay)
+        self._discard(worker)
+        await asyncio.sleep(delay)
+        self._spawn()
+
+    async def close(self) -> None:
+        """Stop every worker (politely, then by force)."""
+        self._closed = True
+        for task in list(self._tasks):
+            task.cancel()
+        for worker in list(self._all):
+            with contextlib.suppress(Exception):
+                worker.conn.send(None)
+        deadline = time.monotonic() + 2.0
+        for worker in list(self._all):
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                await asyncio.to_thread(worker.process.wait, max(0.0, deadline - time.monotonic()))
+            self._discard(worker)
+
+    def _stop(self, worker: _Worker) -> None:
+        with contextlib.suppress(Exception):
+            worker.conn.send(None)
+        self._discard(worker)
+
+    def _discard(self, worker: _Worker) -> None:
+        self._all.discard(worker)
+        if worker.process.poll() is None:
+            worker.process.kill()
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            worker.process.wait(timeout=1.0)
+        with contextlib.suppress(Exception):
+            worker.conn.close()
+
+    def _replace(self, worker: _Worker) -> None:
+        self._discard(worker)
+        self._spawn()
+
+    # -- state ------------------------------------------------------------------------------
+
+    @property
+    def ready(self) -> int:
+        """Workers started and idle."""
+        return self._free.qsize()
+
+    @property
+    def alive(self) -> int:
+        """Worker processes running (idle, busy or starting)."""
+        return sum(1 for w in self._all if w.process.poll() is None)
+
+    # -- jobs -------------------------------------------------------------------------------
+
+    @staticmethod
+    async def _readable(conn: Connection, timeout: float) -> bool:
+        """True once ``conn`` has data (or EOF), False after ``timeout`` [s]."""
+        loop = asyncio.get_running_loop()
+        fired: asyncio.Future[bool] = loop.create_future()
+        fd = conn.fileno()
+
+        def wake() -> None:
+            if not fired.done():
+                fired.set_result(True)
+
+        loop.add_reader(fd, wake)
+        try:
+            await asyncio.wait_for(fired, timeout)
+            return True
+        except TimeoutError:
+            return False
+        finally:
+            loop.remove_reader(fd)
+
+    async def run(self, fn: Callable[..., Any], *args: Any, timeout: float, what: str) -> Any:
+        """``fn(*args)`` in a worker; waits at most ``timeout`` [s] for a worker plus the job.
+
+        ``what`` names the job in messages (``"planning"``). Raises :class:`ServiceBusy` when no
+        worker frees up in time, :class:`TimeBudgetExceeded` when the job overruns (its worker is
+        killed and replaced), the job's :class:`SynthError`, or :class:`WorkerFailed`.
+        """
+        deadline = time.monotonic() + timeout
+        try:
+            worker = await asyncio.wait_for(self._free.get(), timeout)
+        except TimeoutError:
+            raise ServiceBusy(
+                f"no worker became free within {timeout:g} s ({self.size} workers, all busy "
+                "or starting); retry later"
+            ) from None
+        remaining = max(0.0, deadline - time.monotonic())
+        finished = False
+        try:
+            worker.conn.send((fn, args))
+            if not await self._readable(worker.conn, remaining):
+                self.jobs_killed += 1
+                raise TimeBudgetExceeded(
+                    f"{what} did not finish within the time budget of {timeout:g} s and was "
+                    "stopped; simplify the task, ask for fewer trials, or raise the server's "
+                    "SYNTH_PLAN_TIMEOUT",
+                    budget_seconds=timeout,
+                )
+            try:
+                reply = await asyncio.to_thread(worker.conn.recv)
+            except (EOFError, OSError):
+                code = worker.process.poll()
+                raise WorkerFailed(f"worker died during {what} (exit code {code})") from None
+            finished = True
+        finally:
+            if finished:
+                self._free.put_nowait(worker)
+            else:  # overrun, crash or cancellation: the worker's state is unknown
+                self._replace(worker)
+        self.jobs_run += 1
+        kind = reply[0]
+        if kind == "ok":
+            return reply[1]
+        if kind == "synth_error":
+            raise _unpack_synth_error(*reply[1:])
+        if kind == "api_error" and isinstance(reply[1], ApiError):
+            raise reply[1]
+        raise WorkerFailed(f"{what} failed in a worker: {reply[1]}", reply[2])
+
+
+__all__ = ["WorkerPool"]
+
+
+if __name__ == "__main__":  # a worker: python -m server.workers FD [module:warmup]
+    _worker_main(Connection(int(sys.argv[1])), sys.argv[2] if len(sys.argv) > 2 else "")
