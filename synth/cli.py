@@ -53,6 +53,12 @@ def _cmd_locate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_serve(args: argparse.Namespace) -> int:
+    from server.serve import serve
+
+    return serve(args.host, args.port, args.db, args.token, args.model_dir or ())
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``synth`` command."""
     parser = argparse.ArgumentParser(
@@ -88,6 +94,19 @@ def build_parser() -> argparse.ArgumentParser:
         help="bound each estimate with one relaxation, as the seed's printed figures",
     )
     p.set_defaults(func=_cmd_locate)
+
+    p = sub.add_parser("serve", help="run the HTTP service (docs/api.md)")
+    p.add_argument("--host", default="127.0.0.1", help="address to bind (default: 127.0.0.1)")
+    p.add_argument("--port", type=int, default=8000, help="port (default: 8000; 0: any free)")
+    p.add_argument("--db", metavar="PATH|URL", help="SQLite file or SQLAlchemy URL ($SYNTH_DB)")
+    p.add_argument("--token", help="bearer token required for writes ($SYNTH_TOKEN)")
+    p.add_argument(
+        "--model-dir",
+        action="append",
+        metavar="DIR",
+        help="directory task URDFs may come from; repeatable ($SYNTH_MODEL_DIRS)",
+    )
+    p.set_defaults(func=_cmd_serve)
     return parser
 
 
