@@ -6,12 +6,13 @@ One place maps exceptions to statuses (:func:`problem_for`):
 exception                             status  extra members
 ====================================  ======  =============================================
 ``SpecError``, ``UnitError``          422     ``path``, ``line``
-``NoStrategyError``                   422     ``reasons`` (the planner's rejections)
+``NoStrategyError``                   422     ``reasons``: ``{candidate, reason}`` each
 ``ALSyntaxError``                     422     ``line``, ``column``, ``expected``, ``hint``
 ``ALRuntimeError``                    422     ``line``, ``column``
 any other ``SynthError``              422     its structured fields
 request schema errors (FastAPI)       422     ``errors`` (``loc`` and ``msg`` per field)
 :class:`InvalidRequest`               422     ``parameter``
+:class:`MemoryBudgetExceeded`         422     ``limit_mib``
 :class:`Unauthorized`                 401     (``WWW-Authenticate: Bearer``)
 :class:`NotFound`, unknown route      404
 :class:`PayloadTooLarge`              413     ``limit_bytes``
@@ -41,6 +42,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from server.exceptions import (
     ApiError,
     InvalidRequest,
+    MemoryBudgetExceeded,
     NotFound,
     PayloadTooLarge,
     ReplayUnavailable,
@@ -75,6 +77,7 @@ _FIELDS = (
     "hint",
     "context",
     "problem",
+    "task",
     "reasons",
     "rejected",
     "name",
@@ -141,6 +144,12 @@ def problem_for(exc: BaseException) -> tuple[int, dict[str, Any], Mapping[str, s
         for field in _FIELDS:
             if field in vars(exc):
                 body[field] = jsonable(vars(exc)[field])
+        reasons = body.get("reasons")
+        if isinstance(reasons, list) and all(
+            isinstance(r, list) and len(r) == 2 for r in reasons
+        ):  # NoStrategyError: (candidate, reason) pairs
+            body["reasons"] = [{"candidate": c, "reason": r} for c, r in reasons]
+            body["detail"] = str(exc).split("\n", 1)[0].rstrip(":")
         return 422, body, {}
     request_id = uuid.uuid4().hex[:12]
     body = {
@@ -224,6 +233,7 @@ __all__ = [
     "PROBLEM_MEDIA_TYPE",
     "ApiError",
     "InvalidRequest",
+    "MemoryBudgetExceeded",
     "NotFound",
     "PayloadTooLarge",
     "ReplayUnavailable",

@@ -87,6 +87,13 @@ class TimeBudgetExceeded(ApiError):
     title = "Time budget exceeded"
 
 
+class MemoryBudgetExceeded(ApiError):
+    """A job tried to allocate more than a worker may (the task is too large to process)."""
+
+    status = 422
+    title = "Task exceeds the server's memory budget"
+
+
 class WorkerFailed(RuntimeError):
     """A worker process died or a job failed with a non-synth exception: a bug, answered 500.
 
@@ -101,6 +108,7 @@ class WorkerFailed(RuntimeError):
 __all__ = [
     "ApiError",
     "InvalidRequest",
+    "MemoryBudgetExceeded",
     "NotFound",
     "PayloadTooLarge",
     "ReplayUnavailable",

@@ -37,7 +37,11 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         store = PlanStore(settings.db_url)
         await asyncio.to_thread(store.create_schema)
-        pool = WorkerPool(settings.workers, warmup="server.service:warm_up")
+        pool = WorkerPool(
+            settings.workers,
+            warmup="server.service:warm_up",
+            memory_limit=settings.worker_memory_mib * 2**20,
+        )
         await pool.start()
         app.state.service = service.PlanService(store, pool)
         try:

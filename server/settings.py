@@ -38,6 +38,8 @@ class Settings:
     also the longest a request waits for a free worker. ``workers`` [SYNTH_WORKERS]: worker
     processes that run jobs. ``model_dirs`` [SYNTH_MODEL_DIRS, ``os.pathsep``-separated]: the
     only directories a task's URDF, SRDF and package references may resolve into.
+    ``worker_memory_mib`` [SYNTH_WORKER_MEMORY_MIB] [MiB]: address-space cap of each worker
+    (0: none); a job that needs more is refused with 422.
     """
 
     token: str | None = None
@@ -49,6 +51,7 @@ class Settings:
     plan_timeout: float = 60.0
     workers: int = field(default_factory=lambda: max(1, min(4, os.cpu_count() or 1)))
     model_dirs: tuple[Path, ...] = ()
+    worker_memory_mib: int = 4096
 
     def __post_init__(self) -> None:
         if self.token == "":
@@ -65,6 +68,8 @@ class Settings:
             raise ValueError("plan_timeout must be positive [s]")
         if self.workers < 1:
             raise ValueError("workers must be at least 1")
+        if self.worker_memory_mib < 0:
+            raise ValueError("worker_memory_mib must be >= 0 (0: no cap)")
 
     def with_(self, **changes: Any) -> Settings:
         """A copy with ``changes`` applied (the CLI's flags over the environment)."""
@@ -87,6 +92,7 @@ def settings_from_env(env: Mapping[str, str] | None = None) -> Settings:
         ("SYNTH_MAX_TRIALS", "max_trials", int),
         ("SYNTH_PLAN_TIMEOUT", "plan_timeout", float),
         ("SYNTH_WORKERS", "workers", int),
+        ("SYNTH_WORKER_MEMORY_MIB", "worker_memory_mib", int),
     ):
         if name in env:
             try:

@@ -32,7 +32,13 @@ from dataclasses import dataclass, field
 from multiprocessing.connection import Connection
 from typing import Any
 
-from server.exceptions import ApiError, ServiceBusy, TimeBudgetExceeded, WorkerFailed
+from server.exceptions import (
+    ApiError,
+    MemoryBudgetExceeded,
+    ServiceBusy,
+    TimeBudgetExceeded,
+    WorkerFailed,
+)
 from synth.exceptions import SynthError
 
 log = logging.getLogger("server.workers")
@@ -74,9 +80,20 @@ def _unpack_synth_error(module: str, qualname: str, message: str, state: dict[st
     return exc
 
 
-def _worker_main(conn: Connection, warmup: str) -> None:
+def _limit_memory(limit: int) -> None:
+    """Cap this process's address space at ``limit`` [bytes] (0: no cap), where supported."""
+    if limit <= 0:
+        return
+    with contextlib.suppress(ImportError, ValueError, OSError):
+        import resource
+
+        resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+
+
+def _worker_main(conn: Connection, warmup: str, memory_limit: int = 0) -> None:
     """Loop of a worker process: ``(fn, args)`` in, ``("ok", value)`` or an error out."""
     _die_with_parent()
+    _limit_memory(memory_limit)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the server decides when workers stop
     info: dict[str, Any] = {}
     if warmup:
@@ -98,6 +115,8 @@ def _worker_main(conn: Connection, warmup: str) -> None:
             reply = ("synth_error", *_pack_synth_error(exc))
         except ApiError as exc:  # e.g. ReplayUnavailable: picklable as it is
             reply = ("api_error", exc)
+        except MemoryError:
+            reply = ("memory", traceback.format_exc())
         except BaseException as exc:
             reply = ("bug", f"{type(exc).__name__}: {exc}", traceback.format_exc())
         try:
@@ -119,12 +138,14 @@ class WorkerPool:
     Workers are fresh interpreters (``python -m server.workers FD WARMUP``) talking over a
     socket pair, so they never re-import the server's ``__main__``. ``warmup`` names a
     ``module:function`` each worker calls once before its first job; its result (a dict) is
-    kept in :attr:`info`.
+    kept in :attr:`info`. ``memory_limit`` [bytes] caps each worker's address space (0: no
+    cap), so a job that tries to allocate without bound fails in its worker, not the host.
     """
 
-    def __init__(self, size: int, warmup: str = "") -> None:
+    def __init__(self, size: int, warmup: str = "", memory_limit: int = 0) -> None:
         self.size = size
         self.warmup = warmup
+        self.memory_limit = memory_limit
         self.info: dict[str, Any] = {}
         self._free: asyncio.Queue[_Worker] = asyncio.Queue()
         self._all: set[_Worker] = set()
@@ -147,7 +168,14 @@ class WorkerPool:
         parent, child = socket.socketpair()
         with child:
             process = subprocess.Popen(
-                [sys.executable, "-m", "server.workers", str(child.fileno()), self.warmup],
+                [
+                    sys.executable,
+                    "-m",
+                    "server.workers",
+                    str(child.fileno()),
+                    self.warmup,
+                    str(self.memory_limit),
+                ],
                 pass_fds=(child.fileno(),),
                 stdin=subprocess.DEVNULL,
                 start_new_session=False,
@@ -277,7 +305,7 @@ class WorkerPool:
             except (EOFError, OSError):
                 code = worker.process.poll()
                 raise WorkerFailed(f"worker died during {what} (exit code {code})") from None
-            finished = True
+            finished = reply[0] != "memory"  # after a MemoryError, start afresh
         finally:
             if finished:
                 self._free.put_nowait(worker)
@@ -291,11 +319,23 @@ class WorkerPool:
             raise _unpack_synth_error(*reply[1:])
         if kind == "api_error" and isinstance(reply[1], ApiError):
             raise reply[1]
+        if kind == "memory":
+            log.warning("%s ran out of memory in a worker:\n%s", what, reply[1])
+            raise MemoryBudgetExceeded(
+                f"{what} needed more memory than a worker may use "
+                f"({self.memory_limit / 2**20:.0f} MiB) and was stopped; the task is too large "
+                "for this server (e.g. error bounds far larger than the tolerances)",
+                limit_mib=round(self.memory_limit / 2**20),
+            )
         raise WorkerFailed(f"{what} failed in a worker: {reply[1]}", reply[2])
 
 
 __all__ = ["WorkerPool"]
 
 
-if __name__ == "__main__":  # a worker: python -m server.workers FD [module:warmup]
-    _worker_main(Connection(int(sys.argv[1])), sys.argv[2] if len(sys.argv) > 2 else "")
+if __name__ == "__main__":  # a worker: python -m server.workers FD [module:warmup [BYTES]]
+    _worker_main(
+        Connection(int(sys.argv[1])),
+        sys.argv[2] if len(sys.argv) > 2 else "",
+        int(sys.argv[3]) if len(sys.argv) > 3 else 0,
+    )
