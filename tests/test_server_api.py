@@ -1,0 +1,395 @@
+"""HTTP API through FastAPI's TestClient: every endpoint and every error status.
+
+One app (one worker process) serves the module; tests that need other settings override
+``get_settings`` for their duration, the way the style guide's FastAPI tutorial does.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import re
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+import yaml
+from _server_support import HAVE_PLANNER, SEED, YAML, client_for, have_replay, overridden
+from fastapi.testclient import TestClient
+
+from server.db import NewPlan
+from server.settings import Settings
+
+SEED_TEXT = SEED.read_text()
+
+
+@pytest.fixture(scope="module")
+def client(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TestClient]:
+    db = tmp_path_factory.mktemp("db") / "plans.db"
+    with client_for(Settings(db_url=str(db), workers=1, plan_timeout=60.0)) as c:
+        yield c
+
+
+def problem(response: object, status: int) -> dict[str, object]:
+    assert getattr(response, "status_code", None) == status, getattr(response, "text", "")
+    headers = getattr(response, "headers", {})
+    assert headers["content-type"].startswith("application/problem+json")
+    body = response.json()  # type: ignore[attr-defined]
+    assert body["status"] == status
+    assert body["title"] and body["detail"] and body["type"]
+    return dict(body)
+
+
+# -- health and schema ----------------------------------------------------------------------------
+
+
+def test_healthz_reports_database_workers_and_stages(client: TestClient) -> None:
+    body = client.get("/healthz").json()
+    assert body["status"] == "ok"
+    assert body["database"] == "ok"
+    assert body["workers"]["size"] == 1 and body["workers"]["alive"] == 1
+
+
+def test_openapi_documents_every_endpoint(client: TestClient) -> None:
+    schema = client.get("/openapi.json").json()
+    paths = schema["paths"]
+    assert set(paths) >= {
+        "/healthz",
+        "/v1/plans",
+        "/v1/plans/{plan_id}",
+        "/v1/plans/{plan_id}/program.al",
+        "/v1/replays",
+    }
+    body = paths["/v1/plans"]["post"]["requestBody"]["content"]
+    assert {"application/yaml", "application/json"} <= set(body)
+    assert "422" in paths["/v1/plans"]["post"]["responses"]
+    assert "HTTPBearer" in json.dumps(schema["components"]["securitySchemes"])
+
+
+# -- spec errors: 422 with the field path and line ------------------------------------------------
+
+
+def test_spec_error_names_field_and_yaml_line(client: TestClient) -> None:
+    text = SEED_TEXT.replace("[45.2 cm, 102 cm, 0 cm]", "[45.2, 102 cm, 0 cm]", 1)
+    line = next(i for i, s in enumerate(text.splitlines(), 1) if "[45.2, 102 cm" in s)
+    body = problem(client.post("/v1/plans", content=text, headers=YAML), 422)
+    assert body["path"] == "frames[0].pose.translation[0]"
+    assert body["line"] == line
+    assert "unit" in str(body["message"])
+
+
+def test_json_spec_error_names_field(client: TestClient) -> None:
+    data = yaml.safe_load(SEED_TEXT)
+    data["insertion"]["dr_ok"] = "3 kg"
+    body = problem(client.post("/v1/plans", json=data), 422)
+    assert body["path"] == "insertion.dr_ok"
+
+
+def test_json_syntax_error_has_line(client: TestClient) -> None:
+    body = problem(
+        client.post(
+            "/v1/plans",
+            content=b'{"name": "t",\n "frames": [}',
+            headers={"Content-Type": "application/json"},
+        ),
+        422,
+    )
+    assert body["line"] == 2 and "JSON" in str(body["detail"])
+
+
+@pytest.mark.parametrize(
+    ("body", "fragment"),
+    [
+        (b"", "empty"),
+        (b"\xff\xfe name: t", "UTF-8"),
+        (b"a: &x [1, 2]\nb: *x\n", "alias"),
+        (b"[" * 100 + b"]" * 100, "nested"),
+        (b"- just\n- a list\n", "mapping"),
+        (b"name: t\nframes: [\n", "YAML syntax"),
+    ],
+)
+def test_malformed_bodies_are_422(client: TestClient, body: bytes, fragment: str) -> None:
+    answer = problem(client.post("/v1/plans", content=body, headers=YAML), 422)
+    assert fragment.lower() in str(answer["detail"]).lower()
+
+
+def test_unsupported_media_type_is_415(client: TestClient) -> None:
+    answer = problem(client.post("/v1/plans", data={"spec": SEED_TEXT}), 415)
+    assert "application/yaml" in answer["accepted"]  # type: ignore[operator]
+
+
+# -- model files stay inside the model directories ------------------------------------------------
+
+
+def _urdf_spec(urdf: str) -> str:
+    return SEED_TEXT.replace(
+        "    model: stanford", f"    urdf: {json.dumps(urdf)}\n    tool_frame: tool0", 1
+    )
+
+
+def test_urdf_reference_is_refused_without_model_dirs(client: TestClient) -> None:
+    body = problem(client.post("/v1/plans", content=_urdf_spec("arm.urdf"), headers=YAML), 422)
+    assert body["path"] == "manipulator.arm.urdf"
+    assert "model directories" in str(body["detail"])
+
+
+@pytest.mark.parametrize("reference", ["../secret.urdf", "/etc/passwd", "link.urdf"])
+def test_urdf_reference_cannot_escape_model_dir(
+    client: TestClient, tmp_path: Path, reference: str
+) -> None:
+    models = tmp_path / "models"
+    models.mkdir()
+    (tmp_path / "secret.urdf").write_text("<robot name='x'/>")
+    os.symlink(tmp_path / "secret.urdf", models / "link.urdf")
+    with overridden(client.app, model_dirs=(models,)):  # type: ignore[arg-type]
+        body = problem(client.post("/v1/plans", content=_urdf_spec(reference), headers=YAML), 422)
+    assert body["path"] == "manipulator.arm.urdf"
+
+
+# -- limits ---------------------------------------------------------------------------------------
+
+
+def test_body_over_limit_is_413(client: TestClient) -> None:
+    with overridden(client.app, max_body_bytes=1000):  # type: ignore[arg-type]
+        body = problem(client.post("/v1/plans", content=b"#" * 1001, headers=YAML), 413)
+        assert body["limit_bytes"] == 1000
+
+        def chunks() -> Iterator[bytes]:  # no Content-Length: read up to the limit
+            for _ in range(20):
+                yield b"#" * 100
+
+        problem(client.post("/v1/plans", content=chunks(), headers=YAML), 413)
+        problem(client.post("/v1/replays", content=b"{" + b" " * 2000 + b"}"), 413)
+
+
+def test_trials_beyond_the_servers_maximum_is_422(client: TestClient) -> None:
+    body = problem(client.post("/v1/plans?trials=100000", content=SEED_TEXT, headers=YAML), 422)
+    assert body["parameter"] == "trials"
+    problem(client.post("/v1/plans?trials=-1", content=SEED_TEXT, headers=YAML), 422)
+    problem(client.post("/v1/replays", json={"plan_id": "0" * 32, "trials": 10**6}), 422)
+
+
+def test_time_budget_is_504_and_the_worker_is_replaced(client: TestClient) -> None:
+    with overridden(client.app, plan_timeout=0.002):  # type: ignore[arg-type]
+        body = problem(client.post("/v1/plans", content=SEED_TEXT, headers=YAML), 504)
+    assert body["budget_seconds"] == pytest.approx(0.002)
+    assert "time budget" in str(body["detail"])
+    # The overrun worker was killed; its replacement serves the next request.
+    answer = client.post("/v1/plans", content=b"name: t\nframes: []\n", headers=YAML)
+    assert answer.status_code == 422
+
+
+# -- auth -----------------------------------------------------------------------------------------
+
+
+def test_writes_need_the_token_reads_do_not(client: TestClient) -> None:
+    with overridden(client.app, token="s3cret"):  # type: ignore[arg-type]
+        for headers in ({}, {"Authorization": "Bearer wrong"}, {"Authorization": "Basic s3cret"}):
+            answer = client.post("/v1/plans", content=SEED_TEXT, headers={**YAML, **headers})
+            problem(answer, 401)
+            assert answer.headers["www-authenticate"] == "Bearer"
+        problem(client.post("/v1/replays", json={"plan_id": "0" * 32}), 401)
+        authorised = {**YAML, "Authorization": "Bearer s3cret"}
+        answer = client.post("/v1/plans", content=b"name: t\nframes: []\n", headers=authorised)
+        assert answer.status_code == 422  # past the gate
+        assert client.get("/v1/plans").status_code == 200
+        assert client.get("/healthz").status_code == 200
+
+
+def test_protected_reads_need_the_token(client: TestClient) -> None:
+    with overridden(client.app, token="s3cret", protect_reads=True):  # type: ignore[arg-type]
+        problem(client.get("/v1/plans"), 401)
+        problem(client.get(f"/v1/plans/{'0' * 32}"), 401)
+        ok = client.get("/v1/plans", headers={"Authorization": "Bearer s3cret"})
+        assert ok.status_code == 200
+        assert client.get("/healthz").status_code == 200
+
+
+# -- unknown ids, routes, methods -----------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "path",
+    [f"/v1/plans/{'0' * 32}", f"/v1/plans/{'0' * 32}/program.al", "/v1/plans/x'%20OR%201=1", "/v2"],
+)
+def test_unknown_ids_and_routes_are_404(client: TestClient, path: str) -> None:
+    problem(client.get(path), 404)
+
+
+def test_unknown_plan_in_replay_is_404(client: TestClient) -> None:
+    problem(client.post("/v1/replays", json={"plan_id": "f" * 32}), 404)
+
+
+def test_wrong_method_is_405(client: TestClient) -> None:
+    problem(client.delete("/v1/plans"), 405)
+
+
+@pytest.mark.parametrize(
+    "body",
+    [
+        {},
+        {"program": "BEGIN END"},
+        {"spec": {"name": "t"}, "plan_id": "0" * 32, "program": "x"},
+        {"plan_id": "0" * 32, "seed": -1},
+        {"plan_id": "0" * 32, "extra": 1},
+    ],
+)
+def test_malformed_replay_requests_are_422(client: TestClient, body: dict[str, object]) -> None:
+    answer = problem(client.post("/v1/replays", json=body), 422)
+    assert answer["errors"]
+
+
+def test_replay_without_the_replay_stage_is_an_explicit_503(client: TestClient) -> None:
+    if have_replay():
+        pytest.skip("this build has a replay")
+    body = problem(
+        client.post("/v1/replays", json={"program": "BEGIN END", "spec": SEED_TEXT}), 503
+    )
+    assert "replay not available in this build" in str(body["detail"])
+
+
+# -- listing --------------------------------------------------------------------------------------
+
+
+def _store_plan(client: TestClient, name: str) -> str:
+    store = client.app.state.service.store  # type: ignore[attr-defined]
+    plan, created = store.add(
+        NewPlan(
+            content_hash=f"test-{name}",
+            task_name=name,
+            spec_text="name: x\n",
+            spec_media_type="yaml",
+            spec={"name": name},
+            options={
+                "trials": 0,
+                "seed": 0,
+                "try_harder": False,
+                "exhaustive": False,
+                "validate": False,
+            },
+            result={"strategy": {"name": f"s-{name}", "time": {"total": 6.0}}},
+            program="BEGIN END\n",
+            validation=None,
+        )
+    )
+    assert created
+    return str(plan.id)
+
+
+def test_listing_pages_newest_first(client: TestClient) -> None:
+    ids = [_store_plan(client, f"list-{i}") for i in range(5)]
+    seen: list[str] = []
+    url: str | None = "/v1/plans?limit=2"
+    while url is not None:
+        page = client.get(url).json()
+        assert len(page["items"]) <= 2
+        seen += [item["id"] for item in page["items"]]
+        url = page["next"]
+    assert [i for i in seen if i in ids] == ids[::-1]
+    first = client.get("/v1/plans?limit=1").json()["items"][0]
+    assert first["strategy"] == "s-list-4" and first["expected_time"] == 6.0
+    assert first["links"]["self"] == f"/v1/plans/{first['id']}"
+    problem(client.get("/v1/plans?limit=0"), 422)
+    problem(client.get("/v1/plans?cursor=abc"), 422)
+
+
+def test_stored_plan_and_program_are_served(client: TestClient) -> None:
+    plan_id = _store_plan(client, "served")
+    body = client.get(f"/v1/plans/{plan_id}").json()
+    assert body["id"] == plan_id and body["task"] == "served" and body["validation"] is None
+    program = client.get(f"/v1/plans/{plan_id}/program.al")
+    assert program.status_code == 200
+    assert program.headers["content-type"].startswith("text/plain")
+    assert program.text == "BEGIN END\n"
+
+
+# -- a genuine bug is a generic 500, logged -------------------------------------------------------
+
+
+def test_a_bug_is_a_generic_logged_500(
+    client: TestClient, caplog: pytest.LogCaptureFixture
+) -> None:
+    app = client.app
+
+    @app.get("/boom", include_in_schema=False)  # type: ignore[attr-defined, untyped-decorator]
+    async def boom() -> None:
+        raise RuntimeError("secret internal detail")
+
+    unchecked = TestClient(app, raise_server_exceptions=False)  # type: ignore[arg-type]
+    with caplog.at_level(logging.ERROR, logger="server"):
+        answer = unchecked.get("/boom")
+    body = problem(answer, 500)
+    assert "secret" not in answer.text
+    assert re.fullmatch(r"[0-9a-f]{12}", str(body["request_id"]))
+    assert any(body["request_id"] in r.getMessage() and r.exc_info for r in caplog.records)
+
+
+# -- the seed's round trip (needs the planner and codegen) ----------------------------------------
+
+needs_planner = pytest.mark.skipif(not HAVE_PLANNER, reason="planner/codegen not in this build")
+
+
+@needs_planner
+def test_seed_round_trip(client: TestClient) -> None:
+    from synth.al.parser import parse_program
+
+    validate = have_replay()
+    answer = client.post(
+        f"/v1/plans?trials=2&validate={str(validate).lower()}", content=SEED_TEXT, headers=YAML
+    )
+    assert answer.status_code == 201, answer.text
+    plan = answer.json()
+    assert answer.headers["location"] == f"/v1/plans/{plan['id']}"
+    assert plan["task"] == "seed_4_8"
+    assert plan["strategy"]["search"] is not None  # seed §4.8: search needed
+    assert plan["strategy"]["tap"] is None  # ... and no tap
+    assert (plan["validation"] is not None) == validate
+    assert client.get(answer.headers["location"]).json() == plan
+    program = client.get(plan["links"]["program"])
+    assert program.status_code == 200 and program.headers["content-type"].startswith("text/plain")
+    assert program.text == plan["program"]
+    parse_program(program.text)
+    # An identical submission is answered from the store.
+    again = client.post(
+        f"/v1/plans?trials=2&validate={str(validate).lower()}", content=SEED_TEXT, headers=YAML
+    )
+    assert again.status_code == 200 and again.json()["id"] == plan["id"]
+
+
+@needs_planner
+def test_no_feasible_strategy_is_422_with_the_planners_reasons(client: TestClient) -> None:
+    far = SEED_TEXT.replace("[24.1 cm, 117 cm, 0 cm]", "[24.1 cm, 517 cm, 0 cm]", 1)
+    body = problem(client.post("/v1/plans?validate=false", content=far, headers=YAML), 422)
+    assert body["title"] == "No feasible strategy" and body["task"] == "seed_4_8"
+    reasons = body["reasons"]
+    assert isinstance(reasons, list) and reasons
+    assert all(set(r) == {"candidate", "reason"} for r in reasons)
+    assert any("no arm solution" in r["reason"] for r in reasons)
+
+
+@needs_planner
+def test_a_task_too_large_for_the_planner_is_422_not_500(client: TestClient) -> None:
+    tight = SEED_TEXT.replace("dr_ok: 0.762 cm", "dr_ok: 0.001 cm", 1)
+    answer = client.post("/v1/plans?validate=false", content=tight, headers=YAML)
+    problem(answer, 422)
+
+
+@needs_planner
+def test_validation_without_replay_is_an_explicit_503(client: TestClient) -> None:
+    if have_replay():
+        pytest.skip("this build has a replay")
+    body = problem(client.post("/v1/plans", content=SEED_TEXT, headers=YAML), 503)
+    assert "replay not available in this build" in str(body["detail"])
+
+
+@needs_planner
+def test_plans_survive_an_app_restart(tmp_path: Path) -> None:
+    settings = Settings(db_url=str(tmp_path / "restart.db"), workers=1)
+    with client_for(settings) as first:
+        created = first.post("/v1/plans?validate=false", content=SEED_TEXT, headers=YAML)
+        assert created.status_code == 201, created.text
+    with client_for(settings) as second:
+        again = second.get(created.headers["location"])
+        assert again.status_code == 200
+        assert again.json() == created.json()

@@ -1,0 +1,200 @@
+"""Server building blocks on their own: settings, model paths, the store, the worker pool."""
+
+from __future__ import annotations
+
+import asyncio
+import operator
+import os
+import sqlite3
+import time
+from pathlib import Path
+
+import pytest
+
+from server.db import NewPlan, PlanStore
+from server.errors import problem_for
+from server.exceptions import ServiceBusy, TimeBudgetExceeded, WorkerFailed
+from server.modelpaths import resolve_model_file
+from server.settings import settings_from_env
+from server.workers import WorkerPool
+from synth.exceptions import ALSyntaxError, SpecError, SynthError
+from synth.models.loader import parse_task
+
+# -- settings -------------------------------------------------------------------------------------
+
+
+def test_settings_from_env(tmp_path: Path) -> None:
+    settings = settings_from_env(
+        {
+            "SYNTH_TOKEN": "t",
+            "SYNTH_DB": str(tmp_path / "x.db"),
+            "SYNTH_PLAN_TIMEOUT": "2.5",
+            "SYNTH_WORKERS": "3",
+            "SYNTH_MODEL_DIRS": os.pathsep.join([str(tmp_path), ""]),
+            "SYNTH_PROTECT_READS": "yes",
+        }
+    )
+    assert settings.token == "t" and settings.protect_reads
+    assert settings.db_url == f"sqlite:///{tmp_path / 'x.db'}"
+    assert settings.plan_timeout == 2.5 and settings.workers == 3
+    assert settings.model_dirs == (tmp_path.resolve(),)
+    assert settings_from_env({"SYNTH_DB": "postgresql://u@h/db"}).db_url == "postgresql://u@h/db"
+    assert settings_from_env({"SYNTH_TOKEN": ""}).token is None
+
+
+@pytest.mark.parametrize(
+    "env",
+    [{"SYNTH_WORKERS": "many"}, {"SYNTH_WORKERS": "0"}, {"SYNTH_PLAN_TIMEOUT": "-1"}],
+)
+def test_bad_settings_are_value_errors(env: dict[str, str]) -> None:
+    with pytest.raises(ValueError):
+        settings_from_env(env)
+
+
+# -- model paths ----------------------------------------------------------------------------------
+
+
+@pytest.fixture
+def models(tmp_path: Path) -> Path:
+    root = tmp_path / "models"
+    (root / "ur5" / "meshes").mkdir(parents=True)
+    (root / "ur5" / "ur5.urdf").write_text("<robot name='ur5'/>")
+    (tmp_path / "outside.urdf").write_text("<robot name='x'/>")
+    os.symlink(tmp_path / "outside.urdf", root / "escape.urdf")
+    os.symlink(root / "ur5" / "ur5.urdf", root / "inside.urdf")
+    return root
+
+
+def test_model_files_resolve_inside_model_dirs(models: Path) -> None:
+    found = resolve_model_file("ur5/ur5.urdf", "f", [models])
+    assert found == (models / "ur5" / "ur5.urdf").resolve()
+    assert resolve_model_file(str(found), "f", [models]) == found
+    assert resolve_model_file("inside.urdf", "f", [models]) == found  # symlink that stays in
+    meshes = resolve_model_file("ur5/meshes", "f", [models], directory=True)
+    assert meshes.is_dir()
+
+
+@pytest.mark.parametrize(
+    ("reference", "fragment"),
+    [
+        ("../outside.urdf", "'..'"),
+        ("ur5/../../outside.urdf", "'..'"),
+        ("escape.urdf", "symlink"),
+        ("/etc/passwd", "inside a model directory"),
+        ("missing.urdf", "not in the server's model directories"),
+        ("ur5/meshes", "not a file"),
+        ("", "not a valid path"),
+    ],
+)
+def test_model_file_escapes_are_spec_errors(models: Path, reference: str, fragment: str) -> None:
+    with pytest.raises(SpecError) as info:
+        resolve_model_file(reference, "manipulator.arm.urdf", [models])
+    assert info.value.path == "manipulator.arm.urdf"
+    assert fragment in info.value.detail
+
+
+def test_no_model_dirs_means_no_model_files() -> None:
+    with pytest.raises(SpecError, match="no model directories"):
+        resolve_model_file("ur5.urdf", "f", [])
+
+
+# -- store ----------------------------------------------------------------------------------------
+
+
+def _plan(key: str) -> NewPlan:
+    return NewPlan(
+        content_hash=key,
+        task_name="t",
+        spec_text="name: t\n",
+        spec_media_type="yaml",
+        spec={"name": "t"},
+        options={"trials": 1},
+        result={"strategy": {"name": "s"}},
+        program="BEGIN END\n",
+        validation={"success_rate": 1.0},
+    )
+
+
+def test_store_uses_wal_and_deduplicates(tmp_path: Path) -> None:
+    db = tmp_path / "plans.db"
+    store = PlanStore(f"sqlite:///{db}")
+    store.create_schema()
+    first, created = store.add(_plan("k1"))
+    twin, again = store.add(_plan("k1"))
+    assert created and not again and twin.id == first.id
+    store.close()
+    with sqlite3.connect(db) as raw:
+        assert raw.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
+    reopened = PlanStore(f"sqlite:///{db}")
+    got = reopened.get(first.id)
+    assert got is not None and got.validation == {"success_rate": 1.0}
+    assert got.created_at.tzinfo is not None
+    assert reopened.get("nope") is None
+    reopened.close()
+
+
+def test_store_pages(tmp_path: Path) -> None:
+    store = PlanStore("sqlite://")
+    store.create_schema()
+    ids = [store.add(_plan(f"k{i}"))[0].id for i in range(5)]
+    page, cursor = store.page(3)
+    assert [p.id for p in page] == ids[:1:-1] and cursor is not None
+    rest, end = store.page(3, cursor)
+    assert [p.id for p in rest] == ids[1::-1] and end is None
+
+
+# -- the one error mapping ------------------------------------------------------------------------
+
+
+def test_problem_for_maps_synth_errors_to_422_with_fields() -> None:
+    status, body, _ = problem_for(SpecError("frames[1].pose", "bad pose", 7))
+    assert status == 422 and body["path"] == "frames[1].pose" and body["line"] == 7
+    status, body, _ = problem_for(
+        ALSyntaxError(3, 5, "unexpected token", expected=("THEN",), hint="h")
+    )
+    assert status == 422 and body["column"] == 5 and body["expected"] == ["THEN"]
+    status, body, _ = problem_for(SynthError("anything a user can cause"))
+    assert status == 422
+    status, body, _ = problem_for(KeyError("bug"))
+    assert status == 500 and "bug" not in body["detail"]
+
+
+# -- worker pool ----------------------------------------------------------------------------------
+
+
+def test_worker_pool_budget_busy_bugs_and_crashes() -> None:
+    async def scenario() -> None:
+        pool = WorkerPool(1)
+        await pool.start()
+        try:
+            assert await pool.run(operator.add, 2, 3, timeout=30, what="adding") == 5
+            # A SynthError comes back as the same class with the same fields.
+            with pytest.raises(SpecError) as info:
+                await pool.run(parse_task, "name: t\nframes: []\n", timeout=30, what="parsing")
+            assert info.value.path == "frames" and info.value.line == 2
+            assert str(info.value) == "frames (line 2): a task needs at least one frame"
+            # Any other exception is a bug: WorkerFailed with the remote traceback.
+            with pytest.raises(WorkerFailed) as bug:
+                await pool.run(operator.truediv, 1, 0, timeout=30, what="dividing")
+            assert "ZeroDivisionError" in bug.value.remote_traceback
+            # Overrun: the worker is killed, the caller told at once.
+            started = time.monotonic()
+            with pytest.raises(TimeBudgetExceeded):
+                await pool.run(time.sleep, 30, timeout=0.5, what="sleeping")
+            assert time.monotonic() - started < 5
+            assert pool.jobs_killed == 1
+            # A job queued behind a long one gives up when its wait exceeds the budget: 503.
+            slow = asyncio.ensure_future(pool.run(time.sleep, 1.0, timeout=60, what="sleeping"))
+            await asyncio.sleep(0)  # the long job queues first
+            with pytest.raises(ServiceBusy):
+                await pool.run(operator.add, 1, 1, timeout=0.2, what="adding")
+            await slow
+            # A worker that dies mid-job is a bug (500) and is replaced.
+            with pytest.raises(WorkerFailed, match="died"):
+                await pool.run(os._exit, 3, timeout=30, what="exiting")
+            assert await pool.run(operator.mul, 6, 7, timeout=30, what="multiplying") == 42
+        finally:
+            await pool.close()
+        assert pool.alive == 0
+
+    asyncio.run(scenario())
