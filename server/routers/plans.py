@@ -105,9 +105,10 @@ async def create_plan(
     validate: Annotated[bool, Query(description="replay the program (false: skip)")] = True,
 ) -> dict[str, Any]:
     """Plan the task in the body; ``201`` with ``Location``, or ``200`` for a duplicate."""
-    options = PlanOptions(
-        trials=_trials(trials, settings),
-        seed=seed,
+    trials = _trials(trials, settings)
+    options = PlanOptions(  # trials and seed mean nothing without a replay: same hash
+        trials=trials if validate else 0,
+        seed=seed if validate else 0,
         try_harder=try_harder,
         exhaustive=exhaustive,
         validate=validate,
