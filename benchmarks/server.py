@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import importlib
 import os
 import re
 import statistics
@@ -74,11 +75,12 @@ def in_process(text: str, duration: float) -> Level:
     from synth.codegen.emitter import emit_program
     from synth.models.graph import AttributeGraph
     from synth.models.loader import parse_task
-    from synth.strategies.planner import plan_task
+
+    planner = importlib.import_module("synth.strategies.planner")
 
     def once() -> None:
         spec = parse_task(unique_spec(text).decode())
-        emit_program(plan_task(spec).strategy, AttributeGraph(spec))
+        emit_program(planner.plan_task(spec).strategy, AttributeGraph(spec))
 
     once()  # warm-up (imports, caches)
     latencies: list[float] = []
@@ -201,6 +203,11 @@ def main() -> None:
     )
     parser.add_argument("--trials", type=int, default=2, help="replay trials with --validate")
     args = parser.parse_args()
+    try:
+        for module in ("synth.strategies.planner", "synth.codegen.emitter"):
+            importlib.import_module(module)
+    except ImportError as exc:
+        raise SystemExit(f"benchmarks/server.py needs the planner and codegen: {exc}") from None
     counts = [int(c) for c in args.clients.split(",") if c.strip()]
     text = SEED.read_text()
     query = f"trials={args.trials}" if args.validate else "validate=false"
