@@ -182,3 +182,20 @@ class CodegenError(SynthError):
         self.field = field
         self.problem = problem
         super().__init__(f"{field}: {problem}")
+
+
+class NoStrategyError(SynthError):
+    """The planner found no feasible strategy: every candidate was rejected.
+
+    ``reasons`` lists ``(candidate, reason)`` pairs, one per rejection, in the order the planner
+    made them (grasp generation, approach, refinement); the message shows them one per line.
+    """
+
+    def __init__(self, task: str, reasons: tuple[tuple[str, str], ...]) -> None:
+        self.task = task
+        self.reasons = reasons
+        lines = [f"no feasible pin-in-hole strategy for task {task!r}:"]
+        lines += [f"  - {candidate}: {reason}" for candidate, reason in reasons]
+        if not reasons:
+            lines.append("  - no candidate strategy was generated")
+        super().__init__("\n".join(lines))

@@ -146,6 +146,10 @@ class Tap:
     ``offset`` [m] is the tapping place in the hole frame (z = 0 on the surface);
     ``place``/``via``/``target`` the destinations of the guarded move; ``dz_after`` [m] the
     certified Δz with the measurement added; ``time`` [s] its expected extra time.
+    ``clearance`` [m] is the place's distance to the nearest hole or edge. Planner extras:
+    ``dz_first_order`` [m] the seed's linearised corrected Δz, ``ring_radius`` [m] the radius of
+    the search ring the place came from and ``ring`` its scored points ``(x, y, d)`` [m] in the
+    surface frame (the table at L2345), ``measurement_bound`` [m] the largest |CORR| possible.
     """
 
     offset: tuple[float, float, float]
@@ -156,6 +160,10 @@ class Tap:
     target: Destination
     dz_after: float
     time: float
+    dz_first_order: float = math.nan
+    ring_radius: float = math.nan
+    ring: tuple[tuple[float, float, float], ...] = ()
+    measurement_bound: float = math.nan
 
     def to_json(self) -> dict[str, Any]:
         """JSON form (SI)."""
@@ -164,7 +172,10 @@ class Tap:
             "surface": self.surface,
             "clearance": self.clearance,
             "dz_after": self.dz_after,
+            "dz_first_order": self.dz_first_order,
             "time": self.time,
+            "ring_radius": self.ring_radius,
+            "measurement_bound": self.measurement_bound,
         }
 
 
@@ -246,6 +257,8 @@ class PinInHoleStrategy:
     fingers: str = "BHAND"
     release_opening: float | None = None
     retreat: Destination | None = None
+    decisions: tuple[str, ...] = ()
+    """The planner's reasons in words: why a tap and a search, or why not (seed §4.8)."""
 
     @property
     def goodness(self) -> float:
@@ -311,6 +324,7 @@ class PinInHoleStrategy:
             "force_threshold": self.force_threshold,
             "let_go_opening": self.let_go_opening,
             "get_clear": self.get_clear.to_json(),
+            "decisions": list(self.decisions),
         }
 
 
@@ -328,7 +342,13 @@ class Rejection:
 
 @dataclass(frozen=True, eq=False)
 class PlanResult:
-    """Outcome of planning: the chosen strategy, the candidates and the rejections."""
+    """Outcome of planning: the chosen strategy, the candidates and the rejections.
+
+    ``refined`` counts the candidates refined (§4.5) before selection stopped; ``mode`` is
+    ``best-first`` or ``exhaustive``; ``minimum_refinement_cost`` [s] the cutoff's lower bound on
+    fine-motion time (L2459); ``planning_time`` [s] wall time; ``counters`` the IK, motion-time,
+    bound and LP calls.
+    """
 
     strategy: PinInHoleStrategy
     candidates: tuple[PinInHoleStrategy, ...]
@@ -336,6 +356,8 @@ class PlanResult:
     refined: int
     planning_time: float
     counters: dict[str, int] = field(default_factory=dict)
+    mode: str = "best-first"
+    minimum_refinement_cost: float = 0.0
 
     def to_json(self) -> dict[str, Any]:
         """The whole ``synth plan --json`` document (without the program text)."""
@@ -348,11 +370,17 @@ class PlanResult:
                     "phi": c.phi,
                     "refined": c.refined,
                     "time": c.goodness,
+                    "transport": c.ttime,
+                    "fine": c.finetime,
+                    "tap": c.tap is not None,
+                    "search": c.search is not None,
                 }
                 for c in self.candidates
             ],
             "rejected": [r.to_json() for r in self.rejected],
             "refined": self.refined,
+            "mode": self.mode,
+            "minimum_refinement_cost": self.minimum_refinement_cost,
             "planning_time": self.planning_time,
             "counters": dict(self.counters),
         }
