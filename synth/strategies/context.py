@@ -1,0 +1,255 @@
+"""What every planning stage shares: the task, its arm, the insertion and the counters.
+
+:func:`build_context` reads the task once (attribute graph, insertion parameters of seed §4.2,
+the arm, the park configuration, the pin's depth d_i in its start hole) and makes the root of
+the multiple-world assertion base (seed L1800): the facts every hypothetical world of a
+candidate strategy starts from. The context also funnels the arm and the bound calls so that a
+plan can report how many inverse-kinematics solutions, motion times and LPs it needed.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+import pinocchio as pin
+from numpy.typing import NDArray
+
+from synth.errors.bounds import Interval, bound_linear
+from synth.errors.parameters import ParameterSpace
+from synth.exceptions import SpecError, UnreachableError
+from synth.models.arm import Arm, load_arm, motion_time, rank_solutions
+from synth.models.graph import AttributeGraph, pose_to_se3
+from synth.models.insertion import InsertionParameters, derive
+from synth.models.spec import HandSpec, HoleShape, PinShape, TaskSpec, Uncertainty
+from synth.models.world import Fact, World
+from synth.strategies.options import PlanOptions
+
+Configuration = NDArray[np.float64]
+PinEnd = Literal["tip", "head"]
+
+
+@dataclass
+class PlanCounters:
+    """Work done by one plan: arm solutions, motion times and error bounds.
+
+    ``bounds`` counts extrema of linear functionals over a parameter set; ``lp`` those of them
+    that needed HiGHS (coupled constraints, e.g. a tap measurement) instead of the closed form.
+    Local to one :func:`~synth.strategies.planner.plan_task` call.
+    """
+
+    ik: int = 0
+    motion_time: int = 0
+    bounds: int = 0
+    lp: int = 0
+
+    def as_dict(self) -> dict[str, int]:
+        """The counts for ``PlanResult.counters``."""
+        return {
+            "ik": self.ik,
+            "motion_time": self.motion_time,
+            "bounds": self.bounds,
+            "lp": self.lp,
+        }
+
+    def count_bounds(self, space: ParameterSpace, n: int = 1) -> None:
+        """Record ``n`` bound evaluations over ``space`` (LPs unless it is a box)."""
+        self.bounds += n
+        if not space.is_box:
+            self.lp += n
+
+
+@dataclass(frozen=True, eq=False)
+class PlanContext:
+    """The inputs shared by the planning stages (see the module docstring).
+
+    ``pin_frame``, ``hole_frame``, ``start_hole`` are frame names; ``pin_al``, ``hole_al``,
+    ``hand_al`` AL names. ``d_i`` [m] is how deep the pin sits in its start hole (tip first,
+    seed L2036); ``target_end`` says which end goes into the target hole and
+    ``transform_pin_end`` is that end's frame in the pin frame (z out of the hole once
+    inserted). ``q_park`` is the arm at the park frame.
+    """
+
+    spec: TaskSpec
+    graph: AttributeGraph
+    arm: Arm
+    insertion: InsertionParameters
+    options: PlanOptions
+    pin_frame: str
+    hole_frame: str
+    start_hole: str
+    pin_shape: PinShape
+    hole_shape: HoleShape
+    hand: HandSpec
+    hand_al: str
+    hand_error: Uncertainty | None
+    park: pin.SE3
+    q_park: Configuration
+    d_i: float
+    target_end: PinEnd
+    transform_pin_end: pin.SE3
+    base_world: World
+    counters: PlanCounters = field(default_factory=PlanCounters)
+
+    @property
+    def pin_al(self) -> str:
+        """AL name of the pin (``PIN1``)."""
+        return self.graph.al_names[self.pin_frame]
+
+    @property
+    def hole_al(self) -> str:
+        """AL name of the target hole (``BH1``)."""
+        return self.graph.al_names[self.hole_frame]
+
+    @property
+    def world_hole(self) -> pin.SE3:
+        """Nominal pose of the target hole in the world."""
+        return self.graph.world_from(self.hole_frame)
+
+    @property
+    def world_pin(self) -> pin.SE3:
+        """Nominal initial pose of the pin in the world."""
+        return self.graph.world_from(self.pin_frame)
+
+    def solutions(self, transform_world_hand: pin.SE3) -> list[Configuration]:
+        """Every arm configuration reaching a hand pose (counted as one IK call)."""
+        self.counters.ik += 1
+        return self.arm.inverse(transform_world_hand)
+
+    def best_rated(self, transform_world_hand: pin.SE3) -> tuple[Configuration, float] | None:
+        """The best configuration by the seed's rating |45° − θ5| (L2096) and its cost [rad]."""
+        found = self.solutions(transform_world_hand)
+        if not found:
+            return None
+        best = rank_solutions(self.arm, found)[0]
+        return best.q, best.cost
+
+    def nearest(self, transform_world_hand: pin.SE3, q_from: Configuration) -> Configuration | None:
+        """The configuration reaching a pose that is quickest to reach from ``q_from``.
+
+        Among the solutions, the one minimising ``max_j |Δq_j| / v_j`` (the seed's motion-time
+        rule without grace, L3846), so consecutive points of a move stay on one arm branch.
+        """
+        found = self.solutions(transform_world_hand)
+        if not found:
+            return None
+        speed = self.arm.limits.velocity
+        return min(found, key=lambda q: float(np.max(np.abs(q - q_from) / speed)))
+
+    def motion(self, waypoints: list[Configuration]) -> float:
+        """Duration [s] of a move through ``waypoints`` by the configured rule (one call)."""
+        self.counters.motion_time += 1
+        return motion_time(self.arm.limits, waypoints, self.options.timing_rule).duration
+
+    def bound(self, objective: NDArray[np.float64], space: ParameterSpace) -> Interval:
+        """Extrema of ``objective · v`` over ``space`` (closed form or LP), counted."""
+        self.counters.count_bounds(space)
+        return bound_linear(objective, space)
+
+
+def _require(spec: TaskSpec) -> None:
+    if spec.insertion is None:
+        raise SpecError("insertion", "synth plan needs an 'insertion' section (pin and hole)")
+    if spec.manipulator is None:
+        raise SpecError("manipulator", "synth plan needs a 'manipulator' section (arm and park)")
+    if spec.insertion.start_hole is None:
+        raise SpecError(
+            "insertion.start_hole",
+            "synth plan needs the hole the pin starts in (the grasp is planned there, seed §4.3.1)",
+        )
+
+
+def start_depth(graph: AttributeGraph, start_hole: str, pin_frame: str) -> float:
+    """d_i [m]: depth of the pin tip below the mouth of its start hole (seed L2036).
+
+    The pin must stand in its start hole tip first, its axis along the hole's outward normal
+    (seed L2036: "the origin of the pin's coordinate system is at the pin tip inserted into the
+    hole"); then ``d_i = −z`` of the tip in the hole frame.
+    """
+    transform_hole_pin = graph.relative(start_hole, pin_frame)
+    axis = transform_hole_pin.rotation[:, 2]
+    if float(axis[2]) < math.cos(math.radians(1.0)):
+        raise SpecError(
+            f"frames.{pin_frame}",
+            f"the pin must stand tip first in its start hole {start_hole!r} with its axis along "
+            "the hole's normal (seed L2036)",
+        )
+    return -float(transform_hole_pin.translation[2])
+
+
+def pin_end_frame(pin_shape: PinShape, end: PinEnd) -> pin.SE3:
+    """Frame of the pin end that enters the target hole, in the pin frame.
+
+    ``tip``: the pin frame itself. ``head``: ``trans(rot(x̂, 180°), (0, 0, l))``, the far end
+    with z pointing back along the pin, so that in both cases z leaves the hole.
+    """
+    if end == "tip":
+        return pin.SE3.Identity()
+    return pin.SE3(pin.exp3(np.array([math.pi, 0.0, 0.0])), np.array([0.0, 0.0, pin_shape.length]))
+
+
+def build_context(
+    spec: TaskSpec, options: PlanOptions | None = None, base_dir: Path | str | None = None
+) -> PlanContext:
+    """Read the task into a :class:`PlanContext`; raise ``SpecError``/``UnreachableError``."""
+    _require(spec)
+    assert spec.insertion is not None and spec.manipulator is not None
+    opts = options or PlanOptions()
+    graph = AttributeGraph(spec)
+    insertion = derive(graph, spec.insertion)
+    assert insertion.start_hole is not None
+    pin_shape = graph.nodes[insertion.pin].shape
+    hole_shape = graph.nodes[insertion.hole].shape
+    assert isinstance(pin_shape, PinShape) and isinstance(hole_shape, HoleShape)
+    manip = spec.manipulator
+    arm = load_arm(manip.arm, manip.hand, base_dir)
+    park = pose_to_se3(manip.park.pose)
+    counters = PlanCounters()
+    counters.ik += 1
+    found = arm.inverse(park)
+    if not found:
+        t = park.translation
+        raise UnreachableError(
+            (float(t[0]), float(t[1]), float(t[2])),
+            tuple(float(v) for v in park.rotation.reshape(-1)),
+            f"the park frame {manip.park.al_name} has no arm solution",
+        )
+    q_park = rank_solutions(arm, found)[0].q
+    d_i = start_depth(graph, insertion.start_hole, insertion.pin)
+    end: PinEnd = "tip" if insertion.direction == "parallel" else "head"
+    pin_al = graph.al_names[insertion.pin]
+    facts: list[Fact] = [
+        ("task", spec.name),
+        ("in-hole", pin_al, graph.al_names[insertion.start_hole], round(d_i, 9)),
+        ("at", pin_al, graph.al_names[insertion.start_hole]),
+        ("holding", manip.al_name, "nothing"),
+        ("hand-error", manip.al_name, "manipulator.hand_error" if manip.hand_error else "exact"),
+    ]
+    for name, link in graph.links.items():
+        if link.uncertainty is not None and link.uncertainty.bounds():
+            facts.append(("uncertain", graph.al_names[name], f"frames.{name}.uncertainty"))
+    return PlanContext(
+        spec=spec,
+        graph=graph,
+        arm=arm,
+        insertion=insertion,
+        options=opts,
+        pin_frame=insertion.pin,
+        hole_frame=insertion.hole,
+        start_hole=insertion.start_hole,
+        pin_shape=pin_shape,
+        hole_shape=hole_shape,
+        hand=manip.hand,
+        hand_al=manip.al_name,
+        hand_error=manip.hand_error,
+        park=park,
+        q_park=q_park,
+        d_i=d_i,
+        target_end=end,
+        transform_pin_end=pin_end_frame(pin_shape, end),
+        base_world=World.root(facts, label="task"),
+        counters=counters,
+    )

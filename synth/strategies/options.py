@@ -1,0 +1,79 @@
+"""Planner options: every constant of seed ch. IV §4.3–4.6 in one frozen record, SI units.
+
+The seed calls most of these numbers "arbitrary" (L2139, L2186) or "current" (L2038, L2289);
+they are parameters here, with the seed's values as defaults and the line each comes from.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+from synth.models.arm import JIFFY
+
+INCH = 0.0254
+"""[m] one inch."""
+DEG = math.pi / 180.0
+"""[rad] one degree."""
+
+OUNCE_FORCE = 0.028349523125 * 9.80665
+"""[N] the weight of one ounce (AL's ``OZ`` as a force)."""
+
+TimingRule = Literal["ruckig", "seed"]
+HandErrorModel = Literal["independent", "repeatable"]
+
+
+@dataclass(frozen=True)
+class PlanOptions:
+    """Constants of the pin-in-hole planner (seed §4.3–4.6); lengths [m], angles [rad], [s]."""
+
+    kappa: float = 0.1 * INCH
+    """κ [m]: extra finger clearance in the grasp-distance limits (L2038)."""
+    short_interval: float = 2.5 * INCH
+    """[m] a d interval shorter than this gets its midpoint only (L2050)."""
+    distance_offset: float = 0.6 * INCH
+    """[m] d₁ = d_max − 0.6 in, d₂ = d_min + 0.6 in on a long interval (L2056–2058)."""
+    same_end_gammas: tuple[float, ...] = (180 * DEG, 135 * DEG, 100 * DEG)
+    """γ values [rad] when the same pin end goes into both holes (L2064–2068)."""
+    turn_over_gamma: float = 90 * DEG
+    """γ [rad] when the pin is turned over between the holes (L2078)."""
+    omega_step: float = 45 * DEG
+    """[rad] ω is tried in these increments (L2082)."""
+    keep_omegas: int = 3
+    """Best-rated ω values kept per (γ, d) (L2122); ``try_harder`` keeps all."""
+    phi_step: float = 45 * DEG
+    """[rad] φ candidates 0, 45°, …, 315° (the table at L2170–2180)."""
+    grasp_approach_distance: float = 2 * INCH
+    """[m] the grasp's approach point backs off along the hand's approach vector (PHL SPEC
+    printouts L2609–2612: VECTOR(−3.59, 0, 7.13) = (0, 0, 3.54) − 5.08·ẑ_hand)."""
+    departure_lift: float = 2 * INCH
+    """[m] the departure point lifts the pin tip this far above its start hole (L2128)."""
+    approach_opening_extra: float = 1 * INCH
+    """[m] approach opening = pin diameter + this (L2139)."""
+    closure_margin: float = 0.1 * INCH
+    """[m] grasp (closure) threshold = pin diameter − this (L2139)."""
+    dtry_extra: float = 1 * INCH
+    """[m] dtry = d_f + this (L2188)."""
+    standoff: float = 1 * INCH
+    """[m] height of the approach point above the hole (L2190)."""
+    force_threshold: float = 8 * OUNCE_FORCE
+    """[N] stop force of the guarded moves: ``on force(pin*zhat)>8*oz`` (L2148; the OCR reads
+    "8*DZ" at L2735)."""
+    tau: float = 0.75
+    """τ [1]: |Δz| ≤ τ·(d_f − d_s) is needed to tell an insertion from a miss (L2289)."""
+    tap_ring_min: float = 0.3 * INCH
+    """[m] Δr_td = max(0.3 in, Δx, Δy): ring spacing of the tapping-place search (L2304)."""
+    tap_travel: float = 2 * INCH
+    """[m] the tap starts this far above the nominal surface and aims this far below (L2852)."""
+    search_step_fraction: float = 0.75
+    """Search ring spacing = this · Δr_ok (L2743: ``R = .572; ! 0.75*DROK``)."""
+    open_time: float = 50 * JIFFY
+    """[s] OPEN BHAND (seed App. 2, L3854: 50 jiffies)."""
+    center_time: float = 50 * JIFFY
+    """[s] CENTER BMANIP (seed App. 2, L3857: 50 jiffies)."""
+    timing_rule: TimingRule = "ruckig"
+    """Motion-time rule of :func:`synth.models.arm.motion_time` (``seed``: L3846)."""
+    tap_hand_errors: HandErrorModel = "independent"
+    """How the hand errors at the tap and at the insertion relate: ``independent`` blocks
+    (conservative) or one ``repeatable`` block (a calibration error that the tap cancels)."""
