@@ -1,0 +1,330 @@
+"""Grasp generation (seed §4.3, L2011–2140): where and how the hand takes the pin.
+
+The hand takes the pin at ``hand = pin ∘ trans(rot(ẑ, ω)·rot(x̂, γ), (0, 0, d))`` (L2020):
+γ is the angle between the pin axis and the hand's approach vector, d the distance from the tip
+along the pin axis, ω the turn of the hand about the pin axis. The method (L2090–2100):
+
+1. limits on d from the pin's depth in its start hole d_i and target hole d_f
+   (:func:`grasp_distance_limits`), then "significantly distinct" d and γ values
+   (:func:`grasp_distances`, :func:`grasp_angles`);
+2. geometric filters with the hand "moved by levitation" (:func:`geometry_problem`): fingers
+   not below either hole plane, approach vector at least 90° from the holes' outward normals,
+   palm clear of the pin shaft;
+3. ω every 45°, an arm solution at each grasping position, graded by the seed's rating
+   |45° − θ5| and pruned to the best three (L2122) unless ``try_harder``;
+4. approach point 2 in back along the hand's approach vector, departure point 2 in above the
+   start hole (L2128), hand openings by L2139, and the pickup's expected time.
+
+Each surviving pickup plans on in its own child world of the assertion base, in which the pin
+is affixed to the hand with its grasp (issue item 6).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+import shapely
+
+from synth.models.spec import HandSpec, PinShape
+from synth.models.world import World
+from synth.strategies.context import Configuration, PinEnd, PlanContext
+from synth.strategies.options import PlanOptions
+from synth.strategies.records import Destination, Grasp, GraspStrategy, Rejection
+
+EXACT = "exact"
+"""World atom for a grasp determination of NILTRANS: ``center`` holds the pin exactly (L2630)."""
+
+
+def grasp_distance_limits(
+    pin_length: float,
+    taper_length: float,
+    d_i: float,
+    d_f: float,
+    pad_radius: float,
+    kappa: float,
+    *,
+    same_end: bool,
+) -> tuple[float, float]:
+    """``(d_min, d_max)`` [m] of the grasp distance (seed L2032–2044, L2076).
+
+    Same end into both holes: ``d_min = max(d_i, d_f) + r_fp + κ``,
+    ``d_max = l_pin − (l_taper + κ)``. Turned over: ``d_i + r_fp + κ ≤ d ≤ l_pin − (d_f + r_fp
+    + κ)``. The interval is empty when ``d_min > d_max``.
+    """
+    if same_end:
+        return max(d_i, d_f) + pad_radius + kappa, pin_length - (taper_length + kappa)
+    return d_i + pad_radius + kappa, pin_length - (d_f + pad_radius + kappa)
+
+
+def grasp_distances(d_min: float, d_max: float, options: PlanOptions) -> tuple[float, ...]:
+    """The d values tried [m]: the midpoint of a short interval, else three (L2050–2060).
+
+    Short (``d_max − d_min < 2.5 in``): ``(d_min + d_max)/2``. Long: ``d_max − 0.6 in``,
+    ``d_min + 0.6 in`` and the midpoint. Empty when ``d_min > d_max``.
+    """
+    if d_min > d_max:
+        return ()
+    middle = (d_min + d_max) / 2
+    if d_max - d_min < options.short_interval:
+        return (middle,)
+    return (d_max - options.distance_offset, d_min + options.distance_offset, middle)
+
+
+def grasp_angles(same_end: bool, options: PlanOptions) -> tuple[float, ...]:
+    """The γ values tried [rad]: 180°, 135°, 100° (L2064–2068), or 90° turned over (L2078)."""
+    return options.same_end_gammas if same_end else (options.turn_over_gamma,)
+
+
+def hand_openings(diameter: float, options: PlanOptions) -> tuple[float, float]:
+    """``(approach, grasp)`` openings [m] (L2139).
+
+    Approach: 1 in + the pin diameter at the grasp point. Grasp (the ``center`` closure
+    threshold): the diameter − 0.1 in.
+    """
+    return diameter + options.approach_opening_extra, diameter - options.closure_margin
+
+
+def finger_span(grasp: Grasp, hand: HandSpec) -> tuple[float, float]:
+    """Lowest and highest pin-axis coordinate [m] of the finger plates.
+
+    A hand-frame point p lies at ``s = d + p_y sin γ + p_z cos γ`` along the pin axis (the third
+    row of ``rot(ẑ, ω)·rot(x̂, γ)`` is ``(0, sin γ, cos γ)``). The plates span
+    ``|p_y| ≤ r_fp`` and ``−L_f ≤ p_z ≤ r_fp`` (:mod:`synth.models.arm.hand`).
+    """
+    s, c = math.sin(grasp.gamma), math.cos(grasp.gamma)
+    across = hand.finger_pad_radius * abs(s)
+    along = sorted((-hand.finger_length * c, hand.finger_pad_radius * c))
+    return grasp.distance - across + along[0], grasp.distance + across + along[1]
+
+
+def palm_clearance(grasp: Grasp, pin_shape: PinShape, hand: HandSpec) -> float:
+    """Distance [m] between the pin shaft and the palm (negative: they overlap).
+
+    In the hand frame the pin axis is the segment ``(s − d)·(0, sin γ, cos γ)``, ``0 ≤ s ≤
+    l_pin``, in the y–z plane through the middle of the palm box ``|y| ≤ p_y/2``,
+    ``−L_f − p_z ≤ z ≤ −L_f``; the distance in that plane less the pin radius. For γ = 180° it
+    is the seed's check l_pin − d < L_f (L2070), with the pin's radius added.
+    """
+    u = np.array([math.sin(grasp.gamma), math.cos(grasp.gamma)])
+    ends = [(s - grasp.distance) * u for s in (0.0, pin_shape.length)]
+    shaft = shapely.LineString([tuple(ends[0]), tuple(ends[1])])
+    half_y = hand.palm_size[1] / 2
+    palm = shapely.box(
+        -half_y, -hand.finger_length - hand.palm_size[2], half_y, -hand.finger_length
+    )
+    return float(shaft.distance(palm)) - pin_shape.diameter / 2
+
+
+def geometry_problem(
+    grasp: Grasp,
+    pin_shape: PinShape,
+    hand: HandSpec,
+    d_i: float,
+    d_f: float,
+    target_end: PinEnd,
+) -> str | None:
+    """Why a grasp would do "something bad with the hand" (L2086–2090), or None.
+
+    (a) fingers not below the start hole's plane (pin-axis coordinate ``d_i``) nor the target
+    hole's (``d_f`` for the tip, ``l_pin − d_f`` for the head); (b) approach vector at least
+    90° from each hole's outward normal: ``cos γ ≤ 0`` at the start hole (tip in, normal = pin
+    ẑ) and at a tip-first target, ``cos γ ≥ 0`` at a head-first target; (c) palm clear of the
+    pin (:func:`palm_clearance`).
+    """
+    lo, hi = finger_span(grasp, hand)
+    cos_gamma = math.cos(grasp.gamma)
+    if lo < d_i - 1e-12:
+        return (
+            f"fingers reach {100 * (d_i - lo):.2f} cm below the start hole's plane "
+            "(seed §4.3.2 condition a)"
+        )
+    if target_end == "tip" and lo < d_f - 1e-12:
+        return (
+            f"fingers reach {100 * (d_f - lo):.2f} cm below the target hole's plane "
+            "(seed §4.3.2 condition a)"
+        )
+    if target_end == "head" and hi > pin_shape.length - d_f + 1e-12:
+        return (
+            f"fingers reach {100 * (hi - pin_shape.length + d_f):.2f} cm below the target "
+            "hole's plane (seed §4.3.2 condition a)"
+        )
+    if cos_gamma > 1e-9 or (target_end == "head" and cos_gamma < -1e-9):
+        return "the approach vector is less than 90° from a hole's outward normal (condition b)"
+    clearance = palm_clearance(grasp, pin_shape, hand)
+    if clearance < 0:
+        return f"the pin pokes {100 * -clearance:.2f} cm into the palm (seed L2070)"
+    return None
+
+
+@dataclass(frozen=True, eq=False)
+class Pickup:
+    """A pickup strategy with its arm configurations and its own hypothetical world.
+
+    ``q_approach``, ``q_grasp``, ``q_departure`` reach the approach, grasp and departure
+    points; ``move_time`` [s] is park → approach → grasp, ``lift_time`` [s] grasp → departure.
+    """
+
+    strategy: GraspStrategy
+    q_approach: Configuration
+    q_grasp: Configuration
+    q_departure: Configuration
+    move_time: float
+    lift_time: float
+    world: World
+
+    @property
+    def name(self) -> str:
+        """The grasp's label (``ω=90° γ=135° d=3.54 cm``)."""
+        return grasp_label(self.strategy.grasp)
+
+
+def grasp_label(grasp: Grasp) -> str:
+    """Human label of a grasp, in degrees and centimetres."""
+    return (
+        f"ω={math.degrees(grasp.omega):.0f}° γ={math.degrees(grasp.gamma):.0f}° "
+        f"d={100 * grasp.distance:.2f} cm"
+    )
+
+
+def _translation(z: float) -> pin.SE3:
+    return pin.SE3(np.eye(3), np.array([0.0, 0.0, z]))
+
+
+def transform_pin_approach(grasp: Grasp, distance: float) -> pin.SE3:
+    """The grasp's approach point in the pin frame: ``T_pin_hand ∘ trans(0, 0, −a)`` [m].
+
+    The hand backs off ``a`` along its own approach vector (Fig. 4.2): for ω = 90°, γ = 135°,
+    d = 3.54 cm and a = 2 in the seed prints ``VECTOR(−3.59, 0, 7.13)`` (L2609).
+    """
+    return grasp.pin_from_hand() * _translation(-distance)
+
+
+def generate_pickups(
+    ctx: PlanContext, *, try_harder: bool = False
+) -> tuple[list[Pickup], list[Rejection]]:
+    """Every feasible pickup strategy of seed §4.3 and the reasons the others were dropped."""
+    opts = ctx.options
+    ins = ctx.insertion
+    same_end = ctx.target_end == "tip"
+    d_min, d_max = grasp_distance_limits(
+        ctx.pin_shape.length,
+        ctx.pin_shape.tip_taper_length,
+        ctx.d_i,
+        ins.d_f,
+        ctx.hand.finger_pad_radius,
+        opts.kappa,
+        same_end=same_end,
+    )
+    rejected: list[Rejection] = []
+    distances = grasp_distances(d_min, d_max, opts)
+    if not distances:
+        rejected.append(
+            Rejection(
+                "grasp",
+                f"no grasp distance: d_min = {100 * d_min:.2f} cm exceeds d_max = "
+                f"{100 * d_max:.2f} cm (seed L2032–2044)",
+            )
+        )
+    approach_opening, grasp_opening = hand_openings(ctx.pin_shape.diameter, opts)
+    if approach_opening > ctx.hand.max_opening:
+        rejected.append(
+            Rejection(
+                "grasp",
+                f"approach opening {100 * approach_opening:.2f} cm exceeds the hand's "
+                f"{100 * ctx.hand.max_opening:.2f} cm (seed L2139)",
+            )
+        )
+        return [], rejected
+    pickups: list[Pickup] = []
+    omegas = [k * opts.omega_step for k in range(round(2 * math.pi / opts.omega_step))]
+    for gamma in grasp_angles(same_end, opts):
+        for d in distances:
+            problem = geometry_problem(
+                Grasp(0.0, gamma, d), ctx.pin_shape, ctx.hand, ctx.d_i, ins.d_f, ctx.target_end
+            )
+            if problem is not None:
+                label = f"γ={math.degrees(gamma):.0f}° d={100 * d:.2f} cm"
+                rejected.append(Rejection(label, problem))
+                continue
+            rated: list[tuple[float, int, Grasp, Configuration]] = []
+            for k, omega in enumerate(omegas):
+                grasp = Grasp(omega, gamma, d)
+                found = ctx.best_rated(ctx.world_pin * grasp.pin_from_hand())
+                if found is None:
+                    rejected.append(
+                        Rejection(grasp_label(grasp), "no arm solution at the grasp point")
+                    )
+                    continue
+                rated.append((found[1], k, grasp, found[0]))
+            # Ratings equal to 1e-9 rad are ties (γ = 180°: θ5 does not depend on ω); ties keep
+            # the ω order, so float noise cannot decide which ω survive the pruning.
+            rated.sort(key=lambda r: (round(r[0], 9), r[1]))
+            keep = rated if try_harder else rated[: opts.keep_omegas]
+            for cost, _, grasp, _ in rated[len(keep) :]:
+                rejected.append(
+                    Rejection(
+                        grasp_label(grasp),
+                        f"pruned: rating |45° − θ5| = {math.degrees(cost):.1f}°, only the best "
+                        f"{opts.keep_omegas} ω are kept (seed L2122; --try-harder keeps all)",
+                    )
+                )
+            for cost, _, grasp, q_grasp in keep:
+                made = _pickup(ctx, grasp, cost, q_grasp, approach_opening, grasp_opening)
+                if isinstance(made, Rejection):
+                    rejected.append(made)
+                else:
+                    pickups.append(made)
+    return pickups, rejected
+
+
+def _pickup(
+    ctx: PlanContext,
+    grasp: Grasp,
+    rating: float,
+    q_grasp: Configuration,
+    approach_opening: float,
+    grasp_opening: float,
+) -> Pickup | Rejection:
+    """Approach and departure points, their arm solutions and the pickup's time (§4.3.3)."""
+    opts = ctx.options
+    transform_pin_hand = grasp.pin_from_hand()
+    approach_xf = transform_pin_approach(grasp, opts.grasp_approach_distance)
+    lift = opts.departure_lift + ctx.d_i
+    q_approach = ctx.nearest(ctx.world_pin * approach_xf, q_grasp)
+    if q_approach is None:
+        return Rejection(grasp_label(grasp), "no arm solution at the grasp's approach point")
+    q_departure = ctx.nearest(ctx.world_pin * _translation(lift) * transform_pin_hand, q_grasp)
+    if q_departure is None:
+        return Rejection(grasp_label(grasp), "no arm solution at the departure point")
+    move_time = ctx.motion([ctx.q_park, q_approach, q_grasp])
+    lift_time = ctx.motion([q_grasp, q_departure])
+    goodness = opts.open_time + move_time + opts.center_time + lift_time
+    pin_al, hand_al = ctx.pin_al, ctx.hand_al
+    strategy = GraspStrategy(
+        object=pin_al,
+        grasp=grasp,
+        approach_point=Destination("approach", hand_al, pin_al, approach_xf),
+        grasp_point=Destination("grasp", hand_al, pin_al, transform_pin_hand),
+        departure_point=Destination("departure", pin_al, pin_al, _translation(lift)),
+        approach_opening=approach_opening,
+        grasp_opening=grasp_opening,
+        goodness=goodness,
+        rating=rating,
+        joint_solution=tuple(float(x) for x in q_grasp),
+        grasp_determination=None,
+        remarks=(
+            f"W = {math.degrees(grasp.omega):.1f} deg Grasp Angle = "
+            f"{math.degrees(grasp.gamma):.1f} deg Grasp Distance = {100 * grasp.distance:.2f}"
+        ),
+    )
+    world = (
+        ctx.base_world.child(grasp_label(grasp))
+        .set_value("holding", hand_al, pin_al)
+        .set_value("affixed", pin_al, hand_al, grasp)
+        .set_value("grasp-determination", pin_al, EXACT)
+        .set_value("at", pin_al, "departure")
+    )
+    return Pickup(strategy, q_approach, q_grasp, q_departure, move_time, lift_time, world)
