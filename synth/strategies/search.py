@@ -1,0 +1,139 @@
+"""The spiral search over the error footprint (seed §4.5.3 L2436, §4.8 L2740–2790).
+
+The generated loop (L2743–2770) tries offsets on rings of radius ``R = step, 2·step, …`` with
+``step = 0.75·Δr_ok`` (L2743: ``R = .572; ! 0.75*DROK``), points every ``DW = step/R`` radians
+from ``W = 0`` while ``W < 2π`` (the OCR's "259°DEG" at L2755 is 2π), and keeps a point when
+``|x| ≤ Δx`` and ``|y| ≤ Δy`` in the footprint frame (turned by ζ about the hole axis).
+
+Rings: the seed's program stops at ``R ≤ 1.72 = 3·step`` for Δx = 1.58 cm (L2753), i.e.
+``ceil(max(Δx, Δy)/step)`` rings; we start there and add rings (and if need be widen the filter,
+:func:`search_extent`) until every point of the footprint lies within Δr_ok of a tried offset
+(the first attempt at the origin included), checked on a grid with the grid's half-diagonal
+added so the check is conservative.
+
+Expected time (L2436): "we only count those points within Δx/2 and Δy/2 of the hole", each
+costing one retry (``Candidate.try_time``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial import cKDTree
+
+from synth.strategies.options import PlanOptions
+from synth.strategies.records import Search
+
+GRID = 41
+"""Grid points per side for the coverage check."""
+MAX_POINTS = 20_000
+"""Largest search pattern planned: beyond this (Δr_ok tiny against the footprint) the planner
+rejects the strategy instead of generating, checking and timing a pattern it would never run."""
+
+
+def ring_points(step: float, ring: int) -> NDArray[np.float64]:
+    """Offsets [m] of one ring: radius ``R = ring·step``, angles ``0, DW, 2·DW, … < 2π``."""
+    radius = ring * step
+    dw = step / radius
+    angles = np.arange(0.0, 2 * math.pi, dw)
+    return radius * np.stack([np.cos(angles), np.sin(angles)], axis=1)
+
+
+def pattern_points(step: float, rings: int) -> NDArray[np.float64]:
+    """Every offset [m] of ``rings`` rings in the seed's order (origin excluded), shape (N, 2)."""
+    if rings <= 0:
+        return np.zeros((0, 2))
+    return np.vstack([ring_points(step, k) for k in range(1, rings + 1)])
+
+
+def inside(points: NDArray[np.float64], dx: float, dy: float) -> NDArray[np.bool_]:
+    """Mask of the points with ``|x| ≤ dx`` and ``|y| ≤ dy`` (L2757)."""
+    return (np.abs(points[:, 0]) <= dx) & (np.abs(points[:, 1]) <= dy)
+
+
+def coverage(points: NDArray[np.float64], dx: float, dy: float, margin: float = 0.0) -> float:
+    """Upper bound [m] of the distance from any footprint point to the nearest tried offset.
+
+    Tried offsets: the origin and the pattern points that pass the filter ``|x| ≤ dx + margin``,
+    ``|y| ≤ dy + margin``. The maximum over a ``GRID × GRID`` grid of the footprint ±dx × ±dy,
+    plus the grid's half-diagonal.
+    """
+    tried = np.vstack([np.zeros((1, 2)), points[inside(points, dx + margin, dy + margin)]])
+    xs, ys = np.linspace(-dx, dx, GRID), np.linspace(-dy, dy, GRID)
+    grid = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)
+    d, _ = cKDTree(tried).query(grid)
+    half_diagonal = 0.5 * math.hypot(2 * dx / (GRID - 1), 2 * dy / (GRID - 1))
+    return float(d.max()) + half_diagonal
+
+
+def pattern_size(step: float, rings: int) -> int:
+    """Number of points of ``rings`` rings: ``Σ_k ⌈2πk⌉ ≤ π·rings·(rings + 1) + rings``."""
+    return sum(math.ceil(2 * math.pi * k - 1e-9) for k in range(1, rings + 1))
+
+
+def seed_rings(dx: float, dy: float, step: float) -> int:
+    """The seed's ring count ``ceil(max(Δx, Δy)/step)`` (L2753), at least 1."""
+    return max(1, math.ceil(max(dx, dy) / step - 1e-12))
+
+
+def search_extent(dx: float, dy: float, dr_ok: float, step: float) -> tuple[int, float]:
+    """``(rings, margin)``: pattern size [1] and widening of the point filter [m].
+
+    Start with the seed's ``ceil(max(Δx, Δy)/step)`` rings and the filter ``|x| ≤ Δx``,
+    ``|y| ≤ Δy``; add rings (up to the footprint's corner) until every footprint point lies
+    within Δr_ok of a tried offset. Near the footprint's edges the filter can drop the only
+    ring points that would cover them (a 2.2 × 2.2 cm footprint is never covered by the seed's
+    filter); then widen the filter by step/4, step/2, … and try again.
+    """
+    first = seed_rings(dx, dy, step)
+    for quarter in range(0, 9):
+        margin = quarter * step / 4
+        last = max(first, math.ceil((math.hypot(dx, dy) + margin) / step)) + 1
+        for rings in range(first, last + 1):
+            points = pattern_points(step, rings)
+            if coverage(points, dx, dy, margin) <= dr_ok:
+                return rings, margin
+    raise ValueError(f"no search pattern of step {step} m covers {dx} × {dy} m within {dr_ok} m")
+
+
+def search_rings(dx: float, dy: float, dr_ok: float, step: float) -> int:
+    """Number of rings of :func:`search_extent`."""
+    return search_extent(dx, dy, dr_ok, step)[0]
+
+
+def expected_points(points: NDArray[np.float64], dx: float, dy: float) -> int:
+    """Pattern points within ``Δx/2, Δy/2`` of the hole (L2436)."""
+    return int(np.count_nonzero(inside(points, dx / 2, dy / 2)))
+
+
+def points_within_box(step: float, half_x: float, half_y: float) -> int:
+    """Pattern points with ``|x| ≤ half_x``, ``|y| ≤ half_y`` [m] (rings out to the corner)."""
+    rings = math.floor(math.hypot(half_x, half_y) / step + 1e-12)
+    if pattern_size(step, rings) > MAX_POINTS:
+        return 0  # a pattern this large is rejected anyway; 0 keeps the bound admissible
+    return expected_points(pattern_points(step, rings), 2 * half_x, 2 * half_y)
+
+
+def plan_search(
+    dx: float, dy: float, zeta: float, dr_ok: float, try_time: float, options: PlanOptions
+) -> Search:
+    """The search record for a footprint ±dx × ±dy turned by ζ [m, rad], retry time [s].
+
+    The record's ``dx``, ``dy`` are the program's point filter: the footprint, widened by the
+    margin of :func:`search_extent` when the seed's filter would leave a gap (none for the
+    seed's fixtures). The expected count uses the footprint itself (L2436).
+    """
+    step = options.search_step_fraction * dr_ok
+    rings, margin = search_extent(dx, dy, dr_ok, step)
+    count = expected_points(pattern_points(step, rings), dx, dy)
+    return Search(
+        dx=dx + margin,
+        dy=dy + margin,
+        zeta=zeta,
+        step=step,
+        rings=rings,
+        expected_points=count,
+        time=count * try_time,
+    )
