@@ -1,0 +1,177 @@
+"""Accuracy refinement of a candidate (seed §4.5, L2203–2440) and the cutoff's lower bound.
+
+For one basic strategy, in its own world:
+
+1. the pin-hole relation at the approach point and its certified footprint
+   (:mod:`synth.strategies.footprint`);
+2. tilt (§4.5.1): ``Δθ > Δθ_ok`` rejects the strategy (L2290);
+3. the guarded moves must work whatever Δz: ``Δz < standoff`` (the approach point stays above
+   the surface) and ``Δz < dtry − d_f`` (a full insertion stops on force, not on arrival) —
+   the "principal constraint" on dtry and standoff of L2186;
+4. along the axis (§4.5.2): ``Δz > τ·(d_f − d_s)`` asks for a tap
+   (:mod:`synth.strategies.tapping`); no tapping place, or a corrected Δz still too large,
+   rejects;
+5. in the plane (§4.5.3): ``Δr = max(Δx, Δy) > Δr_ok`` asks for a search
+   (:mod:`synth.strategies.search`);
+6. ``finetime`` = tap time + search time; the success test's threshold is ``Δz/τ`` with the
+   tap-corrected Δz (the programs of §4.8 test ``|DISTANCE_OFF| > .169`` = .127/.75, L2738,
+   and ``> .239`` ≈ .180/.75, L2836).
+
+:func:`minimum_refinement_cost` is the lower bound on fine-motion time of L2459/L2476.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from synth.errors.estimate import RelationModel
+from synth.models.world import World
+from synth.strategies.approach import Candidate
+from synth.strategies.context import PlanContext
+from synth.strategies.footprint import estimate_footprint, footprint_tables
+from synth.strategies.records import PinInHoleStrategy, Rejection
+from synth.strategies.relations import approach_relation, hole_only_relation
+from synth.strategies.search import (
+    MAX_POINTS,
+    pattern_size,
+    plan_search,
+    points_within_box,
+    seed_rings,
+)
+from synth.strategies.tapping import plan_tap
+
+DEGREE = math.pi / 180
+
+
+@dataclass(frozen=True, eq=False)
+class Refined:
+    """A refined strategy and the world it was planned in."""
+
+    strategy: PinInHoleStrategy
+    world: World
+    candidate: Candidate
+
+
+def _cm(x: float) -> str:
+    return f"{100 * x:.3f} cm"
+
+
+def _deg(x: float) -> str:
+    return f"{x / DEGREE:.3f}°"
+
+
+def refine(ctx: PlanContext, cand: Candidate) -> Refined | Rejection:
+    """Apply §4.5 to one candidate: a refined strategy or the reason it fails."""
+    opts, ins = ctx.options, ctx.insertion
+    phi = cand.strategy.phi
+    fp, _ = estimate_footprint(ctx, approach_relation(ctx, cand.world, phi))
+    decisions: list[str] = []
+    if fp.dtheta > ins.dtheta_ok:
+        return Rejection(
+            cand.name,
+            f"tilt Δθ = {_deg(fp.dtheta)} exceeds Δθ_ok = {_deg(ins.dtheta_ok)} "
+            "(seed §4.5.1: grounds for rejection)",
+        )
+    decisions.append(f"tilt Δθ = {_deg(fp.dtheta)} ≤ Δθ_ok = {_deg(ins.dtheta_ok)}")
+    if fp.dz >= opts.standoff:
+        return Rejection(
+            cand.name,
+            f"Δz = {_cm(fp.dz)} ≥ standoff {_cm(opts.standoff)}: the approach point could lie "
+            "in the object (seed L2186)",
+        )
+    if fp.dz >= cand.strategy.dtry - ins.d_f:
+        return Rejection(
+            cand.name,
+            f"Δz = {_cm(fp.dz)} ≥ dtry − d_f = {_cm(cand.strategy.dtry - ins.d_f)}: the "
+            "guarded move could arrive without a force (seed L2186)",
+        )
+    z_limit = opts.tau * (ins.d_f - ins.d_s)
+    world = cand.world.set_value(
+        "accuracy", ctx.pin_al, ctx.hole_al, (fp.dx, fp.dy, fp.dz, fp.zeta, fp.dtheta)
+    )
+    tap = None
+    dz = fp.dz
+    if fp.dz > z_limit:
+        made = plan_tap(ctx, cand, fp)
+        if isinstance(made, Rejection):
+            return made
+        tap = made
+        dz = tap.dz_after
+        if dz > z_limit:
+            return Rejection(
+                cand.name,
+                f"even after tapping, Δz = {_cm(dz)} exceeds τ·(d_f − d_s) = {_cm(z_limit)}",
+            )
+        decisions.append(
+            f"tap: Δz = {_cm(fp.dz)} exceeds τ·(d_f − d_s) = {_cm(z_limit)}; tapping place "
+            f"({100 * tap.offset[0]:.2f}, {100 * tap.offset[1]:.2f}) cm from {ctx.hole_al} on "
+            f"{tap.surface}, {_cm(tap.clearance)} clear of holes and edges; Δz after the tap "
+            f"{_cm(dz)} (LP), extra time {tap.time:.2f} s"
+        )
+        world = world.set_value("tapped", tap.surface, tap.offset)
+    else:
+        decisions.append(
+            f"no tap: Δz = {_cm(fp.dz)} ≤ τ·(d_f − d_s) = {_cm(z_limit)}, small enough to "
+            "tell an insertion from a miss"
+        )
+    search = None
+    if fp.dr > ins.dr_ok:
+        step = opts.search_step_fraction * ins.dr_ok
+        size = pattern_size(step, seed_rings(fp.dx, fp.dy, step) + 1)
+        if size > MAX_POINTS:
+            return Rejection(
+                cand.name,
+                f"error footprint ±{_cm(fp.dx)} × ±{_cm(fp.dy)} against Δr_ok = "
+                f"{_cm(ins.dr_ok)} needs a search of about {size} points (more than "
+                f"{MAX_POINTS})",
+            )
+        search = plan_search(fp.dx, fp.dy, fp.zeta, ins.dr_ok, cand.try_time, opts)
+        decisions.append(
+            f"search: error footprint ±{_cm(fp.dx)} × ±{_cm(fp.dy)} (ζ = {_deg(fp.zeta)}) "
+            f"exceeds Δr_ok = {_cm(ins.dr_ok)}; {search.rings} rings of {_cm(search.step)}, "
+            f"{search.expected_points} points within Δx/2, Δy/2 expected at "
+            f"{cand.try_time:.2f} s each = {search.time:.2f} s"
+        )
+    else:
+        decisions.append(
+            f"no search: error footprint ±{_cm(fp.dx)} × ±{_cm(fp.dy)} is within Δr_ok = "
+            f"{_cm(ins.dr_ok)}"
+        )
+    finetime = (0.0 if tap is None else tap.time) + (0.0 if search is None else search.time)
+    strategy = dataclasses.replace(
+        cand.strategy,
+        errors=fp,
+        tap=tap,
+        search=search,
+        finetime=finetime,
+        success_threshold=dz / opts.tau,
+        decisions=tuple(decisions),
+    )
+    return Refined(strategy, world, cand)
+
+
+def minimum_refinement_cost(ctx: PlanContext, candidates: Sequence[Candidate]) -> float:
+    """A lower bound [s] on every candidate's fine-motion time (L2459, L2476).
+
+    "Assuming that there is no error in the arm or grasp, so that all error between pin and
+    hole comes from errors in the hole location": the first-order footprint ξ_k^h of
+    :func:`~synth.strategies.relations.hole_only_relation`. Every candidate's relation adds
+    hand (and grasp) blocks to the same box terms, so its support in each direction is at least
+    ξ_k^h (a Minkowski sum of sets holding 0), and its certified values are larger still. Hence
+    if ``max_k ξ_k^h > Δr_ok`` every candidate searches, with ``Δx = max_k ξ_k ≥ max_k ξ_k^h``
+    and ``Δy = ξ_(k+3) ≥ min_k ξ_k^h``; the count of pattern points with ``|x| ≤ Δx/2``,
+    ``|y| ≤ Δy/2`` (the pattern is fixed in the footprint frame) is monotone in both, so it is at
+    least the count for ``(max ξ^h/2, min ξ^h/2)``, each point costing at least the smallest
+    retry time. Tapping gets no bound (0 s): its time depends on a place only refinement finds.
+    """
+    if not candidates:
+        return 0.0
+    first, _ = footprint_tables(ctx, RelationModel.of(hole_only_relation(ctx)))
+    if float(first.max()) <= ctx.insertion.dr_ok:
+        return 0.0
+    step = ctx.options.search_step_fraction * ctx.insertion.dr_ok
+    count = points_within_box(step, float(first.max()) / 2, float(first.min()) / 2)
+    return count * min(c.try_time for c in candidates)
