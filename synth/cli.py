@@ -59,6 +59,28 @@ def _cmd_serve(args: argparse.Namespace) -> int:
     return serve(args.host, args.port, args.db, args.token, args.model_dir or ())
 
 
+def _cmd_plan(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from synth.models.loader import load_task
+    from synth.report import plan_summary
+    from synth.strategies import plan_task
+
+    spec = load_task(args.task)
+    result = plan_task(
+        spec,
+        try_harder=args.try_harder,
+        exhaustive=args.exhaustive,
+        base_dir=Path(args.task).resolve().parent,
+    )
+    document = result.to_json()  # the --json shape; a "program" key can join it here
+    if args.json:
+        print(json.dumps(document, indent=2))
+    else:
+        print(plan_summary(result))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``synth`` command."""
     parser = argparse.ArgumentParser(
@@ -79,6 +101,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--to", required=True, metavar="B", help="frame whose error is bounded")
     p.add_argument("--json", action="store_true", help="print JSON (SI units)")
     p.set_defaults(func=_cmd_errors)
+
+    p = sub.add_parser("plan", help="choose a pin-in-hole strategy (seed ch. IV §4.1–4.6)")
+    p.add_argument("task", help="task specification (YAML) with insertion and manipulator")
+    p.add_argument("--json", action="store_true", help="print JSON (SI units)")
+    p.add_argument(
+        "--try-harder",
+        action="store_true",
+        help="keep every grasp orientation ω with an arm solution, not the best three",
+    )
+    p.add_argument(
+        "--exhaustive",
+        action="store_true",
+        help="refine every candidate instead of stopping at the best-first cutoff",
+    )
+    p.set_defaults(func=_cmd_plan)
 
     p = sub.add_parser("locate", help="derive object locations from their contacts (seed A.1)")
     p.add_argument("task", help="task specification (YAML) with a contacts section")

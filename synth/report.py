@@ -12,6 +12,7 @@ from synth.errors.contacts import ContactProblem
 from synth.errors.estimate import ErrorReport
 from synth.errors.locate import LocationResult
 from synth.models.graph import AttributeGraph
+from synth.strategies.records import Destination, PinInHoleStrategy, PlanResult
 
 _ROWS = (
     ("dx", "Δx", "length"),
@@ -157,3 +158,137 @@ def locate_report(
             ]
         lines.append("")
     return "\n".join(lines).rstrip()
+
+
+def _num(x: float) -> str:
+    """A number the way the seed's printouts show it: three significant digits, 0 for ~0."""
+    return "0" if abs(x) < 5e-4 else f"{x:.3g}"
+
+
+def _rotn(rotation: np.ndarray) -> str:
+    """``NILROTN``, ``ROTN(ZHAT,90*DEG)`` or ``ROTN(VECTOR(.679,.679,.281),149*DEG)``."""
+    import pinocchio as pin
+
+    w = pin.log3(rotation)
+    angle = float(np.linalg.norm(w))
+    if angle < 1e-9:
+        return "NILROTN"
+    axis = w / angle
+    if abs(axis[2]) > 1 - 1e-9:
+        return f"ROTN(ZHAT,{_num(math.degrees(angle) * np.sign(axis[2]))}*DEG)"
+    inner = ",".join(_num(float(a)) for a in axis)
+    return f"ROTN(VECTOR({inner}),{_num(math.degrees(angle))}*DEG)"
+
+
+def al_trans(pose: object) -> str:
+    """An ``SE3`` as the seed prints it: ``TRANS(ROTN(…),VECTOR(x,y,z))``, lengths in cm."""
+    rotation = np.asarray(pose.rotation)  # type: ignore[attr-defined]
+    t = np.asarray(pose.translation) * 100  # type: ignore[attr-defined]
+    vector = ",".join(_num(float(v)) for v in t)
+    return f"TRANS({_rotn(rotation)},VECTOR({vector}))"
+
+
+def _destination(d: Destination) -> str:
+    return f"{d.what}={d.base}*{al_trans(d.xf)}"
+
+
+def strategy_spec(s: PinInHoleStrategy) -> list[str]:
+    """A strategy in the layout of the seed's "PHL SPEC" printouts (L2600–2710).
+
+    Lengths in cm, angles in degrees (the seed's ``PH FP ROT`` was in radians), times in s.
+    """
+    g = s.pickup
+    lines = [
+        f"PHL SPEC {s.name}",
+        "PRELIMS: " + (", ".join(s.preliminaries) or "NULL_RECORD"),
+        f"PICKUP: PICKUP SPEC {g.object} {g.remarks}",
+        "  PRELIMINARIES: " + (", ".join(g.preliminaries) or "NULL_RECORD"),
+        f"  APPROACH OPENING: {_num(100 * g.approach_opening)}",
+        f"  APPROACH: {_destination(g.approach_point)}",
+        f"  GRASP OPENING: {_num(100 * g.grasp_opening)}",
+        f"  GRASP: {_destination(g.grasp_point)}",
+        "  GRASP DETERM: " + ("NILTRANS" if g.grasp_determination is None else "see record"),
+        f"  DEPARTURE POINT: {_destination(g.departure_point)}",
+        f"  GOODNESS: {g.goodness:.3g}",
+        f"  REMARKS: {g.remarks}",
+        f"APPROACH: {_destination(s.approach)}",
+        f"DESTINATION: {_destination(s.destination)}",
+        f"TARGET: {_destination(s.target)}",
+        f"XPORT TIME: {s.ttime - g.goodness:.3g}",
+        f"GOODNESS: {s.ttime:.3g}",
+    ]
+    if s.tap is None:
+        lines.append("TAP: NULL_RECORD")
+    else:
+        lines.append(
+            f"TAP: {_destination(s.tap.place)} ON {s.tap.surface}, clearance "
+            f"{_num(100 * s.tap.clearance)}, DZ after tap {_num(100 * s.tap.dz_after)}, "
+            f"{s.tap.time:.3g} s"
+        )
+    if s.search is None:
+        lines.append("SEARCH: NULL_RECORD")
+    else:
+        lines.append(
+            f"SEARCH: {s.search.rings} rings of {_num(100 * s.search.step)}, "
+            f"{s.search.expected_points} points expected, {s.search.time:.3g} s"
+        )
+    if s.errors is None:
+        lines.append("FINE TIME: (not refined)")
+        return lines
+    e = s.errors
+    lines += [
+        f"FINE TIME: {s.finetime:.3g}",
+        f"TOTAL: {s.goodness:.3g}",
+        f"PH DZ: {_num(100 * e.dz)}",
+        f"PH FP DX: {_num(100 * e.dx)}",
+        f"PH FP DY: {_num(100 * e.dy)}",
+        f"PH FP ROT: {_num(math.degrees(e.zeta))} deg",
+        f"PH DTHETA: {_num(math.degrees(e.dtheta))} deg",
+        f"SUCCESS TEST: |DISTANCE_OFF| > {_num(100 * s.success_threshold)}",
+    ]
+    return lines
+
+
+def plan_summary(result: PlanResult) -> str:
+    """The ``synth plan`` text: the chosen strategy, its reasons, candidates and rejections."""
+    s = result.strategy
+    lines = [
+        "Chosen strategy (lengths in cm, angles in degrees, times in s; certified errors):",
+        "",
+        *strategy_spec(s),
+        "",
+        "Decisions:",
+        *(f"  - {d}" for d in s.decisions),
+        "",
+        f"Estimated time {s.goodness:.2f} s = pickup {s.pickup.goodness:.2f} + transport "
+        f"{s.ttime - s.pickup.goodness:.2f} + fine {s.finetime:.2f}",
+    ]
+    if s.errors is not None:
+        fo = s.errors.first_order
+        lines.append(
+            "First order (seed Eqn 3.5.1): "
+            f"Δx {_num(100 * fo.get('dx', math.nan))}, Δy {_num(100 * fo.get('dy', math.nan))}, "
+            f"Δz {_num(100 * fo.get('dz', math.nan))}, "
+            f"Δθ {_num(math.degrees(fo.get('dtheta', math.nan)))} deg"
+        )
+    lines += [
+        "",
+        f"Candidates ({len(result.candidates)}; {result.mode} refined {result.refined}, "
+        f"minimum refinement cost {result.minimum_refinement_cost:.2f} s):",
+        f"  {'candidate':36}{'gross':>10}{'fine':>8}{'total':>8}  refinement",
+    ]
+    for c in result.candidates:
+        if c.refined:
+            what = ", ".join(
+                x for x, on in (("tap", c.tap is not None), ("search", c.search is not None)) if on
+            )
+            fine, total = f"{c.finetime:8.2f}", f"{c.goodness:8.2f}"
+        else:
+            what, fine, total = "not refined (cutoff)", f"{'—':>8}", f"{'≥':>4}{c.ttime:4.2f}"
+        mark = "*" if c is s else " "
+        lines.append(f"{mark} {c.name:36}{c.ttime:10.2f}{fine}{total}  {what or 'none'}")
+    lines += ["", f"Rejected ({len(result.rejected)}):"]
+    lines += [f"  - {r.candidate}: {r.reason}" for r in result.rejected] or ["  none"]
+    counts = ", ".join(f"{k} {v}" for k, v in result.counters.items())
+    lines += ["", f"Planning time {result.planning_time:.3f} s ({counts})"]
+    return "\n".join(lines)
