@@ -33,6 +33,10 @@ def serve(
     except ValueError as exc:
         print(f"synth serve: error: {exc}", file=sys.stderr)
         return 2
+    problem = _check_database(settings.db_url)
+    if problem:
+        print(f"synth serve: error: {problem}", file=sys.stderr)
+        return 2
     if settings.token is None and host not in ("127.0.0.1", "localhost", "::1"):
         print(
             f"synth serve: warning: no token set and listening on {host}: anyone who can reach "
@@ -41,6 +45,29 @@ def serve(
         )
     uvicorn.run(create_app(settings), host=host, port=port, log_level="info")
     return 0
+
+
+def _check_database(url: str) -> str | None:
+    """None if the database at ``url`` opens and has (or gets) the tables, else the problem."""
+    from sqlalchemy.engine import make_url
+    from sqlalchemy.exc import SQLAlchemyError
+
+    from server.db import PlanStore
+
+    try:
+        shown = make_url(url).render_as_string(hide_password=True)
+    except Exception:
+        return f"not a database URL or path: {url!r}"
+    try:
+        store = PlanStore(url)
+        try:
+            store.create_schema()
+        finally:
+            store.close()
+    except (SQLAlchemyError, ImportError) as exc:
+        reason = str(getattr(exc, "orig", None) or exc).splitlines()[0]
+        return f"cannot open the database {shown}: {reason}"
+    return None
 
 
 __all__ = ["serve"]

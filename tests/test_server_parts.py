@@ -198,3 +198,14 @@ def test_worker_pool_budget_busy_bugs_and_crashes() -> None:
         assert pool.alive == 0
 
     asyncio.run(scenario())
+
+
+def test_serve_refuses_a_database_it_cannot_open(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from server.serve import serve
+
+    assert serve(db=str(tmp_path / "missing" / "x.db"), port=0) == 2
+    assert "cannot open the database" in capsys.readouterr().err
+    assert serve(db="postgresql://u:secret@127.0.0.1:1/x", port=0) == 2
+    assert "secret" not in capsys.readouterr().err
