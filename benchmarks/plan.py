@@ -1,0 +1,70 @@
+"""Time `synth plan` per fixture: best-first against exhaustive selection (seed §4.6).
+
+Usage: python benchmarks/plan.py [--repeat N]
+For every task fixture the planner accepts (and each with --try-harder), prints the median
+planning time of both modes, their ratio, whether they chose the same strategy, how many
+candidates each refined, and the IK, motion-time, bound and LP calls of each.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+from pathlib import Path
+
+from synth.exceptions import SpecError
+from synth.models.loader import load_task
+from synth.strategies import PlanResult, plan_task
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def timed(spec, repeat: int, **kwargs) -> tuple[float, PlanResult]:
+    """Median wall time [s] of ``plan_task`` over ``repeat`` runs, and the last result."""
+    samples = []
+    result = plan_task(spec, **kwargs)  # warm caches (arm model, solver import)
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        result = plan_task(spec, **kwargs)
+        samples.append(time.perf_counter() - t0)
+    return statistics.median(samples), result
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=5)
+    args = parser.parse_args()
+
+    header = (
+        f"{'fixture':24}{'cand':>5}{'bf [s]':>8}{'ex [s]':>8}{'ex/bf':>7}{'same':>6}"
+        f"{'refined':>9}{'IK bf/ex':>11}{'motion bf/ex':>14}{'bounds bf/ex':>14}{'LP bf/ex':>10}"
+    )
+    print(header)
+    print("-" * len(header))
+    for path in sorted((ROOT / "fixtures/tasks").glob("*.yaml")):
+        spec = load_task(path)
+        for harder in (False, True):
+            label = path.stem + (" --try-harder" if harder else "")
+            try:
+                bf_time, bf = timed(spec, args.repeat, try_harder=harder)
+            except SpecError as exc:
+                if not harder:
+                    print(f"{path.stem:24}not plannable: {exc.detail}")
+                break
+            ex_time, ex = timed(spec, args.repeat, try_harder=harder, exhaustive=True)
+            same = bf.strategy.name == ex.strategy.name
+            pairs = [
+                f"{bf.counters[k]}/{ex.counters[k]}" for k in ("ik", "motion_time", "bounds", "lp")
+            ]
+            print(
+                f"{label:24}{len(ex.candidates):5d}{bf_time:8.3f}{ex_time:8.3f}"
+                f"{ex_time / bf_time:7.2f}{'yes' if same else 'NO':>6}"
+                f"{f'{bf.refined}/{ex.refined}':>9}"
+                f"{pairs[0]:>11}{pairs[1]:>14}{pairs[2]:>14}{pairs[3]:>10}"
+            )
+            assert same, f"{label}: best-first {bf.strategy.name} ≠ exhaustive {ex.strategy.name}"
+
+
+if __name__ == "__main__":
+    main()
