@@ -528,3 +528,22 @@ def test_cli_locate_bad_input_exits_2(tmp_path: Path, capsys: pytest.CaptureFixt
     assert main(["locate", str(bad)]) == 2
     err = capsys.readouterr().err
     assert "contacts[2].a (line" in err and "no feature 'edge9'" in err
+
+
+def test_plan_uses_the_located_box(capsys: pytest.CaptureFixture[str]) -> None:
+    """A task whose box is located only by contacts plans like its hand-typed equivalent."""
+    from synth.strategies import plan_task
+
+    spec = load_task("fixtures/tasks/seed_4_8_fixture.yaml")
+    located, by_hand = (plan_task(s).to_json() for s in (spec, resolve_contacts(spec)))
+    for d in (located, by_hand):
+        d.pop("planning_time")
+        d.pop("counters")
+    assert located == by_hand
+    # The fixture holds the box to X ±.1, Y ±.55 cm, W ±1.3° about its nominal — tighter than
+    # seed_4_8's ±0.3 in, ±0.2 in, ±5° (L2566) — so the search footprint is smaller.
+    free = plan_task(load_task("fixtures/tasks/seed_4_8.yaml")).to_json()
+    fixed_search, free_search = located["strategy"]["search"], free["strategy"]["search"]
+    assert fixed_search["dx"] < free_search["dx"] and fixed_search["dy"] < free_search["dy"]
+    assert main(["plan", "fixtures/tasks/seed_4_8_fixture.yaml"]) == 0
+    assert "search" in capsys.readouterr().out

@@ -19,6 +19,7 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from synth.errors.bounds import Interval, bound_linear
+from synth.errors.locate import resolve_contacts
 from synth.errors.parameters import ParameterSpace
 from synth.exceptions import SpecError, UnreachableError
 from synth.models.arm import Arm, load_arm, motion_time, rank_solutions
@@ -196,6 +197,7 @@ def build_context(
 ) -> PlanContext:
     """Read the task into a :class:`PlanContext`; raise ``SpecError``/``UnreachableError``."""
     _require(spec)
+    spec = resolve_contacts(spec)  # objects located by contacts: derived pose and block
     assert spec.insertion is not None and spec.manipulator is not None
     opts = options or PlanOptions()
     graph = AttributeGraph(spec)
