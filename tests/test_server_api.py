@@ -393,3 +393,49 @@ def test_plans_survive_an_app_restart(tmp_path: Path) -> None:
         again = second.get(created.headers["location"])
         assert again.status_code == 200
         assert again.json() == created.json()
+
+
+# -- replays (needs synth.replay) -------------------------------------------------------------
+
+needs_replay = pytest.mark.skipif(
+    not (HAVE_PLANNER and have_replay()), reason="replay not in this build"
+)
+
+
+@needs_replay
+def test_plan_is_validated_by_replay_and_replays_are_reproducible(client: TestClient) -> None:
+    created = client.post("/v1/plans?trials=3&seed=5", content=SEED_TEXT, headers=YAML)
+    assert created.status_code in (200, 201), created.text
+    plan = created.json()
+    validation = plan["validation"]
+    assert set(validation) >= {"ok", "nominal", "monte_carlo"}
+    assert validation["monte_carlo"]["trials"] == 3 and validation["monte_carlo"]["seed"] == 5
+    by_id = client.post("/v1/replays", json={"plan_id": plan["id"], "trials": 3, "seed": 5})
+    assert by_id.status_code == 200, by_id.text
+    assert by_id.json()["monte_carlo"] == validation["monte_carlo"]
+    inline = client.post(
+        "/v1/replays",
+        json={"program": plan["program"], "spec": SEED_TEXT, "trials": 3, "seed": 5},
+    )
+    assert inline.status_code == 200 and inline.json()["nominal"] == by_id.json()["nominal"]
+    as_json = client.post(
+        "/v1/replays",
+        json={"program": plan["program"], "spec": yaml.safe_load(SEED_TEXT), "trials": 0},
+    )
+    assert as_json.status_code == 200 and as_json.json()["nominal"] == validation["nominal"]
+
+
+@needs_replay
+def test_replay_of_a_program_that_does_not_parse_is_422_at_its_line(client: TestClient) -> None:
+    program = "BEGIN\nMOVE BMANIP TO ;\nEND\n"
+    body = problem(client.post("/v1/replays", json={"program": program, "spec": SEED_TEXT}), 422)
+    assert body["title"] == "AL syntax error"
+    assert body["line"] == 2 and isinstance(body["column"], int)
+
+
+@needs_replay
+def test_replay_of_a_spec_that_does_not_validate_is_422(client: TestClient) -> None:
+    body = problem(
+        client.post("/v1/replays", json={"program": "BEGIN END", "spec": {"name": "t"}}), 422
+    )
+    assert body["path"] == "frames"
