@@ -70,17 +70,23 @@ def unique_spec(text: str) -> bytes:
     ).encode()
 
 
-def in_process(text: str, duration: float) -> Level:
-    """Sequential parse + plan + emit in this process (one core), the work of one request."""
+def in_process(text: str, duration: float, trials: int | None) -> Level:
+    """Sequential parse + plan + emit (+ replay with ``trials``) in this process (one core).
+
+    The same work as one request; ``trials`` None: no replay.
+    """
     from synth.codegen.emitter import emit_program
     from synth.models.graph import AttributeGraph
     from synth.models.loader import parse_task
 
     planner = importlib.import_module("synth.strategies.planner")
+    replay = importlib.import_module("synth.replay") if trials is not None else None
 
     def once() -> None:
         spec = parse_task(unique_spec(text).decode())
-        emit_program(planner.plan_task(spec).strategy, AttributeGraph(spec))
+        program = emit_program(planner.plan_task(spec).strategy, AttributeGraph(spec))
+        if replay is not None:
+            replay.replay_program(program, spec, trials=trials, seed=0)
 
     once()  # warm-up (imports, caches)
     latencies: list[float] = []
@@ -204,7 +210,8 @@ def main() -> None:
     parser.add_argument("--trials", type=int, default=2, help="replay trials with --validate")
     args = parser.parse_args()
     try:
-        for module in ("synth.strategies.planner", "synth.codegen.emitter"):
+        needed = ["synth.strategies.planner", "synth.codegen.emitter"]
+        for module in needed + (["synth.replay"] if args.validate else []):
             importlib.import_module(module)
     except ImportError as exc:
         raise SystemExit(f"benchmarks/server.py needs the planner and codegen: {exc}") from None
@@ -212,13 +219,14 @@ def main() -> None:
     text = SEED.read_text()
     query = f"trials={args.trials}" if args.validate else "validate=false"
 
-    base = in_process(text, args.duration)
+    base = in_process(text, args.duration, args.trials if args.validate else None)
     levels: list[Level] = []
     with tempfile.TemporaryDirectory(prefix="synth-bench-") as tmp:
         server = Server(Path(tmp) / "bench.db", args.workers)
         try:
             url = server.wait_ready(args.workers)
-            asyncio.run(load(url, text, 1, 0.0, 1, query))  # warm the path once
+            # Warm every worker's caches (arm, meshes) once before measuring.
+            asyncio.run(load(url, text, args.workers, STARTUP, args.workers, query))
             for n in counts:
                 levels.append(
                     asyncio.run(load(url, text, n, args.duration, args.max_requests, query))
