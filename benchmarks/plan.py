@@ -37,7 +37,7 @@ def main() -> None:
     args = parser.parse_args()
 
     header = (
-        f"{'fixture':24}{'cand':>5}{'bf [s]':>8}{'ex [s]':>8}{'ex/bf':>7}{'same':>6}"
+        f"{'fixture':28}{'cand':>5}{'bf [s]':>8}{'ex [s]':>8}{'ex/bf':>7}{'same':>6}"
         f"{'refined':>9}{'IK bf/ex':>11}{'motion bf/ex':>14}{'bounds bf/ex':>14}{'LP bf/ex':>10}"
     )
     print(header)
@@ -50,7 +50,7 @@ def main() -> None:
                 bf_time, bf = timed(spec, args.repeat, try_harder=harder)
             except SpecError as exc:
                 if not harder:
-                    print(f"{path.stem:24}not plannable: {exc.detail}")
+                    print(f"{path.stem:28}not plannable: {exc.detail}")
                 break
             ex_time, ex = timed(spec, args.repeat, try_harder=harder, exhaustive=True)
             same = bf.strategy.name == ex.strategy.name
@@ -58,7 +58,7 @@ def main() -> None:
                 f"{bf.counters[k]}/{ex.counters[k]}" for k in ("ik", "motion_time", "bounds", "lp")
             ]
             print(
-                f"{label:24}{len(ex.candidates):5d}{bf_time:8.3f}{ex_time:8.3f}"
+                f"{label:28}{len(ex.candidates):5d}{bf_time:8.3f}{ex_time:8.3f}"
                 f"{ex_time / bf_time:7.2f}{'yes' if same else 'NO':>6}"
                 f"{f'{bf.refined}/{ex.refined}':>9}"
                 f"{pairs[0]:>11}{pairs[1]:>14}{pairs[2]:>14}{pairs[3]:>10}"
