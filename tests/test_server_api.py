@@ -384,15 +384,17 @@ def test_validation_without_replay_is_an_explicit_503(client: TestClient) -> Non
 
 
 @needs_planner
-def test_plans_survive_an_app_restart(tmp_path: Path) -> None:
-    settings = Settings(db_url=str(tmp_path / "restart.db"), workers=1)
-    with client_for(settings) as first:
-        created = first.post("/v1/plans?validate=false", content=SEED_TEXT, headers=YAML)
-        assert created.status_code == 201, created.text
-    with client_for(settings) as second:
+def test_a_new_app_on_the_same_file_serves_the_plans(client: TestClient) -> None:
+    # A real restart after kill -9 is in test_server_process.py; this is the in-process twin.
+    created = client.post("/v1/plans?validate=false", content=SEED_TEXT, headers=YAML)
+    assert created.status_code in (200, 201), created.text
+    url = client.app.state.service.store.url  # type: ignore[attr-defined]
+    with client_for(Settings(db_url=url, workers=1)) as second:
         again = second.get(created.headers["location"])
         assert again.status_code == 200
         assert again.json() == created.json()
+        listed = second.get("/v1/plans?limit=100").json()["items"]
+        assert created.json()["id"] in {item["id"] for item in listed}
 
 
 # -- replays (needs synth.replay) -------------------------------------------------------------

@@ -13,7 +13,12 @@ import pytest
 
 from server.db import NewPlan, PlanStore
 from server.errors import problem_for
-from server.exceptions import ServiceBusy, TimeBudgetExceeded, WorkerFailed
+from server.exceptions import (
+    MemoryBudgetExceeded,
+    ServiceBusy,
+    TimeBudgetExceeded,
+    WorkerFailed,
+)
 from server.modelpaths import resolve_model_file
 from server.settings import settings_from_env
 from server.workers import WorkerPool
@@ -209,3 +214,18 @@ def test_serve_refuses_a_database_it_cannot_open(
     assert "cannot open the database" in capsys.readouterr().err
     assert serve(db="postgresql://u:secret@127.0.0.1:1/x", port=0) == 2
     assert "secret" not in capsys.readouterr().err
+
+
+def test_a_job_over_the_memory_cap_is_refused_and_its_worker_replaced() -> None:
+    async def scenario() -> None:
+        pool = WorkerPool(1, memory_limit=1 << 30)
+        await pool.start()
+        try:
+            with pytest.raises(MemoryBudgetExceeded) as info:
+                await pool.run(bytearray, 1 << 34, timeout=30, what="allocating")
+            assert info.value.status == 422 and info.value.extra["limit_mib"] == 1024
+            assert await pool.run(operator.add, 1, 2, timeout=30, what="adding") == 3
+        finally:
+            await pool.close()
+
+    asyncio.run(scenario())
