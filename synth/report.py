@@ -12,6 +12,7 @@ from synth.errors.contacts import ContactProblem
 from synth.errors.estimate import ErrorReport
 from synth.errors.locate import LocationResult
 from synth.models.graph import AttributeGraph
+from synth.models.spec import WORLD
 from synth.strategies.records import Destination, PinInHoleStrategy, PlanResult
 
 _ROWS = (
@@ -35,12 +36,16 @@ def _interval(iv: Interval, kind: str) -> str:
     return f"{_fmt(iv.lo, kind)} .. {_fmt(iv.hi, kind)} {unit}"
 
 
+def _al_label(graph: AttributeGraph, name: str) -> str:
+    """AL name of a frame; the world frame has none and is shown as ``world``."""
+    return name if name == WORLD else graph.node(name).al_name
+
+
 def errors_table(report: ErrorReport, graph: AttributeGraph) -> str:
     """The ``synth errors`` table: first-order (seed) and certified bounds side by side."""
-    a, b = graph.node(report.start), graph.node(report.end)
+    a, b = _al_label(graph, report.start), _al_label(graph, report.end)
     lines = [
-        f"Errors of {a.al_name}⁻¹ ∘ {b.al_name} ({report.start} → {report.end}), "
-        f"in the frame of {report.start}",
+        f"Errors of {a}⁻¹ ∘ {b} ({report.start} → {report.end}), in the frame of {report.start}",
         f"{len(report.parameters)} error parameters: {', '.join(report.parameters) or 'none'}",
         "",
         f"{'':6}{'first order (seed Eqn 3.5.1)':>32}{'certified (exact chain)':>32}",

@@ -185,3 +185,12 @@ def test_cli_json_shape() -> None:
         assert set(data[part]) == {"dx", "dy", "dz", "dtheta_x", "dtheta_y", "dtheta_z", "tilt"}
     assert data["first_order"]["dz"][1] == pytest.approx(0.00127, rel=0.01)
     assert data["certified"]["dz"][1] > data["first_order"]["dz"][1]
+
+
+def test_cli_errors_against_the_world_frame(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["errors", "fixtures/tasks/seed_4_8.yaml", "--from", "world", "--to", "BH1"]) == 0
+    out = capsys.readouterr().out
+    # In the world frame BH1's x error is the box's ±0.3 in = ±0.762 cm plus the box rotation
+    # ±5° acting on the hole's lever arm y = 3.20 cm: 3.20·0.0873 = 0.279 cm; 1.041 cm in all.
+    assert "Errors of world⁻¹ ∘ BH1" in out
+    assert "-1.041 .. +1.041 cm" in out
