@@ -76,11 +76,16 @@ class FootprintView:
 
 @dataclass(frozen=True)
 class HeaderView:
-    """``{ PIN-IN-HOLE STRATEGY name: DROK = … FPX = … ESTIMATED TIME = … }`` (L2715–2717)."""
+    """``{ PIN-IN-HOLE STRATEGY name: DROK = … FPX = … ESTIMATED TIME = … }`` (L2715–2717).
+
+    With a tap, the Δz the insertion faces after it (``Tap.dz_after``; the variation's header
+    prints that figure, DZ = .188, L2806) follows the footprint's own Δz.
+    """
 
     name: Fragment
     dr_ok: Fragment
     footprint: FootprintView | None
+    dz_after_tap: Fragment | None
     estimated_time: Fragment
 
 
@@ -277,6 +282,7 @@ def _header(s: PinInHoleStrategy) -> HeaderView:
         name=L.comment(s.name),
         dr_ok=L.length(s.dr_ok, field="dr_ok"),
         footprint=footprint,
+        dz_after_tap=None if s.tap is None else L.length(s.tap.dz_after, field="tap.dz_after"),
         estimated_time=L.duration(s.goodness, field="goodness"),
     )
 
