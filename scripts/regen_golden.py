@@ -25,6 +25,7 @@ import json
 import sys
 from pathlib import Path
 from types import ModuleType
+from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 GOLDEN = ROOT / "fixtures" / "golden"
@@ -69,20 +70,28 @@ def recorded_source() -> str:
     return str(source)
 
 
-def golden_program(task: str, source: str = "auto") -> str:
-    """The AL program the golden file ``fixtures/golden/<task>.al`` must hold."""
-    from synth.codegen.emitter import emit_program
+def golden_strategy(task: str, source: str = "auto") -> tuple[Any, Any]:
+    """The strategy record and attribute graph the golden program of ``task`` comes from."""
     from synth.models.graph import AttributeGraph
     from synth.models.loader import load_task
 
-    spec = load_task(TASKS_DIR / f"{task}.yaml")
+    path = TASKS_DIR / f"{task}.yaml"
+    spec = load_task(path)
     if resolve_source(source) == "planner":
-        from synth.strategies.planner import plan_task  # type: ignore[import-not-found]
+        from synth.strategies.planner import plan_task
 
-        strategy = plan_task(spec).strategy
+        strategy = plan_task(spec, base_dir=path.parent).strategy
     else:
         strategy = seed_records().STRATEGIES[task]()
-    return emit_program(strategy, AttributeGraph(spec))
+    return strategy, AttributeGraph(spec)
+
+
+def golden_program(task: str, source: str = "auto") -> str:
+    """The AL program the golden file ``fixtures/golden/<task>.al`` must hold."""
+    from synth.codegen.emitter import emit_program
+
+    strategy, graph = golden_strategy(task, source)
+    return emit_program(strategy, graph)
 
 
 def main(argv: list[str] | None = None) -> int:

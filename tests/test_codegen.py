@@ -35,7 +35,7 @@ from synth.codegen.emitter import ALEmitter, emit_program, emitter_for, language
 from synth.exceptions import CodegenError
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
-from synth.strategies.records import PinInHoleStrategy
+from synth.strategies.records import Destination, PinInHoleStrategy
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data"
@@ -347,6 +347,34 @@ def test_tap_program_aborts_when_the_pin_misses() -> None:
     assert result.abort is not None and result.abort.message == "PIN1 MISSED BH1 UNEXPECTEDLY."
 
 
+def fraction(start: Destination, stop: Destination, end: Destination) -> float:
+    """Where ``stop`` lies on the straight guarded move from ``start`` to ``end`` (along z)."""
+    z0, z1, z2 = (float(d.xf.translation[2]) for d in (start, stop, end))
+    return (z0 - z1) / (z0 - z2)
+
+
+@pytest.mark.parametrize("task", TASKS)
+def test_golden_programs_seat_the_pin_in_the_nominal_world(task: str) -> None:
+    # Whatever wrote them: the golden files run, the tap (if any) touches the surface where
+    # the record believes it is, and the first attempt seats the pin at d_f.
+    strategy, graph = REGEN.golden_strategy(task, REGEN.recorded_source())
+    seat = fraction(strategy.approach, strategy.destination, strategy.target)
+    tap = strategy.tap
+    touch = None if tap is None else fraction(tap.via, tap.place, tap.target)
+
+    def script(n: int) -> float | None:
+        return touch if (touch is not None and n == 1) else seat
+
+    machine = ContactMachine(script)
+    interpreter = bind_world(graph).interpreter(machine)
+    text = (GOLDEN / f"{task}.al").read_text(encoding="utf-8")
+    result = interpreter.run(parse_program(text))
+    assert result.completed
+    assert machine.guarded == (1 if tap is None else 2)
+    distance = interpreter.value("DISTANCE_OFF")
+    assert isinstance(distance, V.Scalar) and abs(distance.value) < 1e-9
+
+
 def test_stand_alone_file_runs_without_a_binding() -> None:
     machine = ContactMachine(lambda n: SEATED)
     interpreter = Interpreter(machine, hand_names=HAND_NAMES)
@@ -393,13 +421,11 @@ def test_emitter_interface() -> None:
 def test_unrefined_strategy_has_no_footprint_in_the_header() -> None:
     strategy = replace(strategy_of("seed_4_8_tap"), errors=None)
     text = emit_program(strategy, graph_of("seed_4_8_tap"))
-    assert "FPX" not in text and "DROK = 0.762*CM  ESTIMATED TIME = 6.67*SEC" in text
+    assert "FPX" not in text and "DROK = 0.762*CM  AFTER TAP DZ = 0.188*CM  ESTIMATED" in text
     parse_program(text)
 
 
 def test_release_and_retreat_come_from_the_record() -> None:
-    from synth.strategies.records import Destination
-
     back = Destination("get clear", "BMANIP", "BMANIP", pin.SE3(np.eye(3), np.array([0, 0, -0.1])))
     strategy = replace(strategy_of("seed_4_8"), release_opening=0.035, retreat=back)
     text = emit_program(strategy, graph_of("seed_4_8"))
