@@ -13,6 +13,8 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
+	mkdir -p out
+	$(BIN)/synth plan fixtures/tasks/seed_4_8.yaml -o out/seed_4_8.al
 	$(BIN)/synth errors fixtures/tasks/seed_4_8.yaml --from BH1 --to PIN1
 	$(BIN)/synth errors fixtures/tasks/screw_on_driver.yaml --from hole --to tip
 

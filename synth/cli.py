@@ -62,6 +62,8 @@ def _cmd_serve(args: argparse.Namespace) -> int:
 def _cmd_plan(args: argparse.Namespace) -> int:
     from pathlib import Path
 
+    from synth.codegen.emitter import emit_program
+    from synth.models.graph import AttributeGraph
     from synth.models.loader import load_task
     from synth.report import plan_summary
     from synth.strategies import plan_task
@@ -73,11 +75,22 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         exhaustive=args.exhaustive,
         base_dir=Path(args.task).resolve().parent,
     )
-    document = result.to_json()  # the --json shape; a "program" key can join it here
+    graph = AttributeGraph(spec)
+    program = emit_program(result.strategy, graph, preamble=args.preamble)
+    if args.output is not None:
+        out = Path(args.output)
+        try:
+            out.parent.mkdir(parents=True, exist_ok=True)
+            out.write_text(program, encoding="utf-8", newline="\n")
+        except OSError as exc:
+            raise SynthError(f"cannot write {out}: {exc.strerror or exc}") from None
+    document = {**result.to_json(), "program": program}
     if args.json:
         print(json.dumps(document, indent=2))
     else:
         print(plan_summary(result))
+        if args.output is not None:
+            print(f"AL program written to {args.output}")
     return 0
 
 
@@ -115,6 +128,17 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="refine every candidate instead of stopping at the best-first cutoff",
     )
+    p.add_argument(
+        "-o",
+        "--output",
+        metavar="PROGRAM.al",
+        help="write the AL program of the chosen strategy to this file (the summary still prints)",
+    )
+    p.add_argument(
+        "--preamble",
+        action="store_true",
+        help="start the program with the task's frame declarations and affixments (stand-alone)",
+    )
     p.set_defaults(func=_cmd_plan)
 
     p = sub.add_parser("locate", help="derive object locations from their contacts (seed A.1)")
@@ -144,6 +168,10 @@ def build_parser() -> argparse.ArgumentParser:
         help="directory task URDFs may come from; repeatable ($SYNTH_MODEL_DIRS)",
     )
     p.set_defaults(func=_cmd_serve)
+
+    from synth.replay.cli_command import add_replay_parser  # light: heavy imports run later
+
+    add_replay_parser(sub)
     return parser
 
 

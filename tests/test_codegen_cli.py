@@ -1,0 +1,62 @@
+"""``synth plan TASK.yaml -o PROGRAM.al [--preamble] [--json]`` (issue 5, item 4)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from synth.al.parser import parse_program
+from synth.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+TASK = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
+GOLDEN = ROOT / "fixtures" / "golden"
+
+
+def recorded_source() -> str:
+    return str(json.loads((GOLDEN / "manifest.json").read_text(encoding="utf-8"))["source"])
+
+
+def test_plan_writes_the_program_and_still_prints_the_summary(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "out" / "seed_4_8.al"  # the directory is created
+    assert main(["plan", str(TASK), "-o", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "PHL SPEC" in printed and f"AL program written to {out}" in printed
+    text = out.read_text(encoding="utf-8")
+    parse_program(text)
+    if recorded_source() == "planner":
+        assert text == (GOLDEN / "seed_4_8.al").read_text(encoding="utf-8")
+
+
+def test_plan_json_carries_the_program_and_preamble_makes_it_stand_alone(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    assert main(["plan", str(TASK), "--json", "--preamble"]) == 0
+    document = json.loads(capsys.readouterr().out)
+    program = document["program"]
+    assert program.startswith("{ World binding of task seed_4_8")
+    assert "FRAME BOX" in program and "MOVE PIN1 TO BH1*TRANS(" in program
+    parse_program(program)
+    assert document["strategy"]["search"] is not None
+
+
+def test_plan_without_preamble_json_program_is_the_bare_program(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    assert main(["plan", str(TASK), "--json"]) == 0
+    program = json.loads(capsys.readouterr().out)["program"]
+    assert program.startswith("{ PIN-IN-HOLE STRATEGY")
+
+
+def test_plan_output_that_cannot_be_written_is_a_clean_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    blocker = tmp_path / "file"
+    blocker.write_text("x", encoding="utf-8")
+    assert main(["plan", str(TASK), "-o", str(blocker / "sub" / "p.al")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("synth plan: error: cannot write") and "Traceback" not in err
