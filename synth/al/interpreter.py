@@ -339,6 +339,11 @@ class Interpreter:
 
     # ---- running
 
+    @property
+    def statements(self) -> int:
+        """Statements executed so far by this interpreter (also when a run ended by raising)."""
+        return self._statements
+
     def run(self, program: ast.Program) -> RunResult:
         """Execute ``program``; returns its outcome, raises ALRuntimeError for a faulty one."""
         self._filename = program.filename
