@@ -1,0 +1,93 @@
+"""Which arm configuration reaches a hand pose next, and why none does.
+
+Every hand target of a motion goes through the arm's inverse kinematics (closed form for the
+Stanford arm, seed eqs. 14–32; damped least squares otherwise). Of the attainable solutions the
+one nearest the arm's current configuration (max-norm) is taken, so a motion keeps the arm's
+branch (no wrist flip) whenever the branch reaches.
+
+When no attainable solution exists the pose is classified:
+
+* ``unreachable`` — the pose is outside the arm's workspace. For the Stanford arm: no
+  algebraic solution at all, or none whose boom extension S3 lies within its travel (the
+  wrist centre is out of reach). For other arms every failure is reported this way.
+* ``joint_limit`` — the wrist centre is within reach but every solution needs a revolute joint
+  beyond its limits (e.g. θ5 ∉ [−110°, 110°], seed L963, for a hand turned back towards the arm).
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+import pinocchio as pin
+from numpy.typing import NDArray
+
+from synth.models.arm.arm import Arm
+from synth.models.arm.stanford import StanfordInverse, stanford_inverse_all
+
+__all__ = ["ReachProblem", "describe_pose", "solve_near"]
+
+_TOLERANCE = 1e-9
+
+
+class ReachProblem(Exception):
+    """No attainable configuration: ``kind`` and a one-line ``detail``."""
+
+    def __init__(self, kind: Literal["unreachable", "joint_limit"], detail: str) -> None:
+        super().__init__(f"{kind}: {detail}")
+        self.kind: Literal["unreachable", "joint_limit"] = kind
+        self.detail = detail
+
+
+def describe_pose(pose: pin.SE3) -> str:
+    """``(x, y, z) cm, approach (ax, ay, az)``: a hand pose for messages."""
+    x, y, z = (100.0 * float(v) for v in pose.translation)
+    a = pose.rotation[:, 2]
+    return f"({x:.2f}, {y:.2f}, {z:.2f}) cm, approach ({a[0]:.2f}, {a[1]:.2f}, {a[2]:.2f})"
+
+
+def solve_near(arm: Arm, pose: pin.SE3, near: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The attainable configuration reaching ``pose`` nearest ``near``; ReachProblem if none."""
+    solutions = arm.inverse(pose, hint=near)
+    if solutions:
+        return min(solutions, key=lambda q: float(np.max(np.abs(q - near)))).copy()
+    raise _problem(arm, pose)
+
+
+def _problem(arm: Arm, pose: pin.SE3) -> ReachProblem:
+    where = describe_pose(pose)
+    inverse = arm.closed_form
+    if not isinstance(inverse, StanfordInverse):
+        return ReachProblem("unreachable", f"no arm solution reaches the hand pose {where}")
+    t = inverse.transform_world_base.inverse() * pose * inverse.tool_offset.inverse()
+    candidates = stanford_inverse_all(inverse.params, t.rotation, t.translation)
+    limits = arm.limits
+    prismatic = [i for i, kind in enumerate(limits.kinds) if kind == "prismatic"]
+    within = [
+        np.array(c)
+        for c in candidates
+        if all(
+            limits.lower[i] - _TOLERANCE <= c[i] <= limits.upper[i] + _TOLERANCE for i in prismatic
+        )
+    ]
+    if not within:
+        return ReachProblem("unreachable", f"the hand pose {where} is out of the arm's reach")
+
+    # the candidate closest to its limits names the joints it would need beyond them
+    def excess(q: NDArray[np.float64]) -> NDArray[np.float64]:
+        wrapped = np.array(q, dtype=float)
+        for i, kind in enumerate(limits.kinds):
+            if kind == "revolute":
+                centre = 0.5 * (limits.lower[i] + limits.upper[i])
+                wrapped[i] = centre + (wrapped[i] - centre + np.pi) % (2 * np.pi) - np.pi
+        return np.maximum(limits.lower - wrapped, 0.0) + np.maximum(wrapped - limits.upper, 0.0)
+
+    best = min(within, key=lambda q: float(np.sum(excess(q))))
+    over = excess(best)
+    joints = ", ".join(
+        f"{limits.names[i]} {np.degrees(over[i]):.1f}° past its limit"
+        for i in np.flatnonzero(over > _TOLERANCE)
+    )
+    return ReachProblem(
+        "joint_limit", f"the hand pose {where} needs {joints or 'a joint beyond its limits'}"
+    )
