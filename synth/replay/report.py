@@ -1,0 +1,204 @@
+"""What a replay reports: violations, one run's outcome, the Monte Carlo summary, the whole report.
+
+The JSON shape (issue 6, SI units) is the one ``synth replay --json`` prints and the HTTP API
+returns::
+
+    {"ok": bool,
+     "nominal": {"outcome": ..., "message": ..., "line": ..., "time": ..., "statements": ...,
+                 "violations": [{"kind": ..., "line": ..., "detail": ...}]},
+     "monte_carlo": {"trials": ..., "seed": ..., "success_rate": ..., "outcomes": {...: count},
+                     "time": {"mean": ..., "p95": ...}}}
+
+**Outcomes** of a run: ``success`` (the program ran to its end, the pin is seated in the target
+hole, the hand has let go of it and is clear, no violation); ``abort`` (the program executed
+``ABORT``); ``error`` (the program is faulty: an AL runtime error such as an unknown name);
+``violation`` (the arm could not do what the program asked: a target out of reach or beyond a
+joint limit, or a collision — the run ends there); ``failure`` (the program ran to its end but
+the pin is not seated, or the hand still holds it or touches it). The issue names the first
+three; the other two keep a program that misbehaves apart from one that gives up.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+__all__ = [
+    "OUTCOMES",
+    "MonteCarloReport",
+    "Outcome",
+    "ReplayReport",
+    "RunReport",
+    "Violation",
+    "ViolationKind",
+    "replay_summary",
+    "wilson_interval",
+]
+
+ViolationKind = Literal["unreachable", "joint_limit", "collision"]
+Outcome = Literal["success", "failure", "abort", "violation", "error"]
+OUTCOMES: tuple[Outcome, ...] = ("success", "failure", "abort", "violation", "error")
+
+
+@dataclass(frozen=True)
+class Violation:
+    """The arm could not do what line ``line`` asked: ``kind``, a one-line ``detail``.
+
+    ``time`` [s] is the machine clock when it happened.
+    """
+
+    kind: ViolationKind
+    line: int
+    detail: str
+    time: float = 0.0
+
+    def to_json(self) -> dict[str, Any]:
+        """``{"kind", "line", "detail"}``."""
+        return {"kind": self.kind, "line": self.line, "detail": self.detail}
+
+
+@dataclass(frozen=True)
+class RunReport:
+    """One run of the program: its outcome, message, AL line, time [s] and statements executed.
+
+    ``line`` is the AL line of the ABORT, the runtime error or the violation (None otherwise).
+    """
+
+    outcome: Outcome
+    message: str
+    line: int | None
+    time: float
+    statements: int
+    violations: tuple[Violation, ...] = ()
+
+    @property
+    def success(self) -> bool:
+        """True for the ``success`` outcome."""
+        return self.outcome == "success"
+
+    def to_json(self) -> dict[str, Any]:
+        """The ``nominal`` object of the report's JSON."""
+        return {
+            "outcome": self.outcome,
+            "message": self.message,
+            "line": self.line,
+            "time": self.time,
+            "statements": self.statements,
+            "violations": [v.to_json() for v in self.violations],
+        }
+
+
+def wilson_interval(
+    successes: int, trials: int, z: float = 1.959963984540054
+) -> tuple[float, float]:
+    """Wilson score interval of a binomial proportion (default 95%: z = Φ⁻¹(0.975)).
+
+    p̂ = k/n, centre (p̂ + z²/2n)/(1 + z²/n), half-width z·√(p̂(1−p̂)/n + z²/4n²)/(1 + z²/n).
+    """
+    if trials <= 0:
+        return (0.0, 1.0)
+    p = successes / trials
+    z2 = z * z
+    denominator = 1.0 + z2 / trials
+    centre = (p + z2 / (2 * trials)) / denominator
+    half = z * math.sqrt(p * (1 - p) / trials + z2 / (4 * trials * trials)) / denominator
+    return (max(0.0, centre - half), min(1.0, centre + half))
+
+
+@dataclass(frozen=True)
+class MonteCarloReport:
+    """N trials in sampled true worlds: outcome counts and the time [s] statistics.
+
+    ``outcomes`` counts the trials per outcome (only outcomes that occurred); ``time_mean``
+    and ``time_p95`` are over all trials (None without trials); ``seed`` seeds the trials.
+    """
+
+    trials: int
+    seed: int
+    outcomes: Mapping[str, int] = field(default_factory=dict)
+    time_mean: float | None = None
+    time_p95: float | None = None
+
+    @property
+    def successes(self) -> int:
+        """Trials that succeeded."""
+        return int(self.outcomes.get("success", 0))
+
+    @property
+    def success_rate(self) -> float | None:
+        """Successes over trials (None without trials)."""
+        return self.successes / self.trials if self.trials else None
+
+    def interval(self, z: float = 1.959963984540054) -> tuple[float, float]:
+        """Wilson interval of the success rate (default 95%)."""
+        return wilson_interval(self.successes, self.trials, z)
+
+    def to_json(self) -> dict[str, Any]:
+        """The ``monte_carlo`` object of the report's JSON."""
+        return {
+            "trials": self.trials,
+            "seed": self.seed,
+            "success_rate": self.success_rate,
+            "outcomes": dict(self.outcomes),
+            "time": {"mean": self.time_mean, "p95": self.time_p95},
+        }
+
+
+@dataclass(frozen=True)
+class ReplayReport:
+    """A program replayed on a task: the nominal run and the Monte Carlo trials.
+
+    ``ok`` holds when the nominal run (true world = beliefs) succeeds; ``trials`` keeps every
+    trial's run, in trial order (not part of the JSON).
+    """
+
+    program: str
+    task: str
+    nominal: RunReport
+    monte_carlo: MonteCarloReport
+    trials: tuple[RunReport, ...] = ()
+
+    @property
+    def ok(self) -> bool:
+        """True when the nominal run succeeded."""
+        return self.nominal.success
+
+    def to_json(self) -> dict[str, Any]:
+        """The report as JSON (issue 6 shape, SI units)."""
+        return {
+            "ok": self.ok,
+            "nominal": self.nominal.to_json(),
+            "monte_carlo": self.monte_carlo.to_json(),
+        }
+
+
+def _seconds(value: float | None) -> str:
+    return "-" if value is None else f"{value:.2f} s"
+
+
+def replay_summary(report: ReplayReport) -> str:
+    """The report as text: the nominal run, its violations, and the Monte Carlo summary."""
+    n = report.nominal
+    lines = [f"replay {report.program} on task {report.task}"]
+    where = f" (line {n.line})" if n.line is not None else ""
+    lines.append(
+        f"nominal: {n.outcome}{where}: {n.message}; {_seconds(n.time)}, {n.statements} statements"
+    )
+    for v in n.violations:
+        lines.append(f"  violation: {v.kind} at line {v.line}: {v.detail}")
+    mc = report.monte_carlo
+    if mc.trials:
+        lo, hi = mc.interval()
+        rate = mc.success_rate or 0.0
+        counts = ", ".join(f"{k} {v}" for k, v in mc.outcomes.items())
+        lines.append(
+            f"Monte Carlo: {mc.trials} trials (seed {mc.seed}): success {100 * rate:.1f}% "
+            f"(95% Wilson interval {100 * lo:.1f}–{100 * hi:.1f}%)"
+        )
+        lines.append(f"  outcomes: {counts}")
+        lines.append(f"  time: mean {_seconds(mc.time_mean)}, p95 {_seconds(mc.time_p95)}")
+    else:
+        lines.append("Monte Carlo: no trials")
+    return "\n".join(lines)

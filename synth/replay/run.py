@@ -1,0 +1,328 @@
+"""Replay an AL program on a task: a nominal run and Monte Carlo trials in sampled true worlds.
+
+:func:`replay` parses the program (syntax errors raise :class:`~synth.exceptions.ALSyntaxError`),
+binds the task's world to AL names (:mod:`synth.al.binding`), and runs it on a
+:class:`~synth.replay.machine.ReplayMachine`:
+
+* once in the *nominal* world, where the truth equals the program's beliefs (every object at its
+  nominal pose, no hand positioning error);
+* ``trials`` times in worlds sampled from the task's uncertainty (:mod:`synth.replay.truth`).
+
+**Seeds.** Trial i draws from ``np.random.SeedSequence(seed, spawn_key=(i,))`` — the i-th child
+of ``SeedSequence(seed).spawn(trials)`` — split again into one stream for the world and one for
+the hand errors. A trial's result depends only on (program, task, seed, i): the same for any
+number of workers and any order of completion.
+
+**Parallelism.** With ``workers > 1`` the trials run in a process pool (``spawn`` start
+method; each worker parses the program and builds the arm and meshes once), in chunks; the
+``progress`` callback is called in the caller's process as chunks complete. The library does no
+printing: the CLI draws the progress bar.
+
+**Outcome of a run** (:mod:`synth.replay.report`): ``abort`` when the program aborts, ``error``
+for an AL runtime error, ``violation`` when the machine stops it, otherwise ``success`` if the
+goal holds (:meth:`ReplayMachine.goal`: the insertion's pin seated in its hole, let go, the
+hand clear; a task without an insertion succeeds by running to its end) and ``failure`` if not.
+"""
+
+from __future__ import annotations
+
+import math
+import multiprocessing
+from collections import Counter
+from collections.abc import Callable, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from synth.al import ast
+from synth.al.binding import WorldBinding, bind_world
+from synth.al.interpreter import Interpreter
+from synth.al.parser import parse_program
+from synth.exceptions import ALRuntimeError, SpecError
+from synth.models.arm import Arm, load_arm
+from synth.models.graph import AttributeGraph, pose_to_se3
+from synth.models.loader import load_task
+from synth.models.spec import TaskSpec
+from synth.replay.machine import ReplayMachine, ReplayOptions, ViolationStop
+from synth.replay.reach import describe_pose
+from synth.replay.report import OUTCOMES, MonteCarloReport, Outcome, ReplayReport, RunReport
+from synth.replay.scene import WorkcellModel
+from synth.replay.truth import HandErrors, TrueWorld, nominal_world, sample_world
+
+__all__ = [
+    "ReplayContext",
+    "build_context",
+    "machine_for",
+    "replay",
+    "replay_program",
+    "run_machine",
+    "run_nominal",
+    "run_trial",
+    "run_world",
+    "summarise",
+    "trial_seed",
+]
+
+Progress = Callable[[int, int], None]
+"""``progress(done, total)``: trials finished so far, out of ``total``."""
+
+
+@dataclass(frozen=True, eq=False)
+class ReplayContext:
+    """Everything a run needs, built once per process.
+
+    The parsed program, the task, its world binding, the arm, the workcell's solids, the park
+    pose [m] and the machine's options.
+    """
+
+    program: ast.Program
+    spec: TaskSpec
+    graph: AttributeGraph
+    binding: WorldBinding
+    arm: Arm
+    workcell: WorkcellModel
+    park: pin.SE3
+    options: ReplayOptions
+
+
+def build_context(
+    program_text: str,
+    task: TaskSpec | str | Path,
+    *,
+    filename: str = "<al>",
+    base_dir: str | Path | None = None,
+    options: ReplayOptions | None = None,
+) -> ReplayContext:
+    """Parse the program and build the task's model (raises ALSyntaxError, SpecError, ...).
+
+    ``task`` is a spec or a task file; URDF paths resolve against ``base_dir`` (default: the
+    task file's directory, or the working directory for a spec).
+    """
+    program = parse_program(program_text, filename=filename)
+    if isinstance(task, TaskSpec):
+        spec = task
+    else:
+        spec = load_task(task)
+        if base_dir is None:
+            base_dir = Path(task).resolve().parent
+    manipulator = spec.manipulator
+    if manipulator is None:
+        raise SpecError("manipulator", "the replay needs the task's manipulator (arm and park)")
+    arm = load_arm(manipulator.arm, manipulator.hand, base_dir)
+    park = pose_to_se3(manipulator.park.pose)
+    if not arm.inverse(park):
+        raise SpecError(
+            "manipulator.park",
+            f"the arm cannot reach its park frame {manipulator.park.al_name} "
+            f"({describe_pose(park)}), where the replay starts it",
+        )
+    graph = AttributeGraph(spec)
+    return ReplayContext(
+        program=program,
+        spec=spec,
+        graph=graph,
+        binding=bind_world(graph),
+        arm=arm,
+        workcell=WorkcellModel(graph, [arm.transform_world_base.translation]),
+        park=park,
+        options=options or ReplayOptions(),
+    )
+
+
+def machine_for(context: ReplayContext, world: TrueWorld, hand_errors: HandErrors) -> ReplayMachine:
+    """A fresh machine in ``world``: the hand at the park pose, every pin where it truly is."""
+    workcell = context.workcell.place(world)
+    pins = {frame: world.pose(frame) for frame in workcell.pins}
+    return ReplayMachine(context.arm, workcell, pins, context.park, hand_errors, context.options)
+
+
+def run_machine(context: ReplayContext, machine: ReplayMachine) -> tuple[RunReport, Interpreter]:
+    """Run the program on ``machine``; the run's report and the interpreter (its beliefs)."""
+    interpreter = context.binding.interpreter(machine)
+    try:
+        result = interpreter.run(context.program)
+    except ViolationStop as stop:
+        v = stop.violation
+        report = RunReport(
+            "violation",
+            f"{v.kind}: {v.detail}",
+            v.line,
+            machine.time(),
+            interpreter.statements,
+            tuple(machine.violations),
+        )
+        return report, interpreter
+    except ALRuntimeError as error:
+        report = RunReport(
+            "error", error.problem, error.line, machine.time(), interpreter.statements
+        )
+        return report, interpreter
+    if result.abort is not None:
+        report = RunReport(
+            "abort", result.abort.message, result.abort.line, result.time, result.statements
+        )
+        return report, interpreter
+    insertion = context.spec.insertion
+    if insertion is None:
+        report = RunReport(
+            "success", "the program ran to its end", None, result.time, result.statements
+        )
+        return report, interpreter
+    pin_frame = context.graph.resolve(insertion.pin)
+    hole_frame = context.graph.resolve(insertion.hole)
+    achieved, why = machine.goal(pin_frame, hole_frame)
+    outcome: Outcome = "success" if achieved else "failure"
+    return RunReport(outcome, why, None, result.time, result.statements), interpreter
+
+
+def run_world(context: ReplayContext, world: TrueWorld, hand_errors: HandErrors) -> RunReport:
+    """Run the program once in ``world`` with ``hand_errors``; the run's report."""
+    return run_machine(context, machine_for(context, world, hand_errors))[0]
+
+
+def run_nominal(context: ReplayContext) -> RunReport:
+    """The run in the believed world (no errors anywhere)."""
+    return run_world(context, nominal_world(context.graph), HandErrors.none())
+
+
+def trial_seed(seed: int, index: int) -> np.random.SeedSequence:
+    """The seed sequence of trial ``index``: child ``index`` of ``SeedSequence(seed)``."""
+    return np.random.SeedSequence(seed, spawn_key=(index,))
+
+
+def run_trial(context: ReplayContext, seed: int, index: int) -> RunReport:
+    """Monte Carlo trial ``index``: a sampled world and hand errors from :func:`trial_seed`."""
+    world_seed, hand_seed = trial_seed(seed, index).spawn(2)
+    world = sample_world(context.graph, np.random.default_rng(world_seed))
+    manipulator = context.spec.manipulator
+    assert manipulator is not None
+    hand = HandErrors(manipulator.hand_error, np.random.default_rng(hand_seed))
+    return run_world(context, world, hand)
+
+
+def summarise(runs: Sequence[RunReport], seed: int) -> MonteCarloReport:
+    """Outcome counts (in :data:`OUTCOMES` order) and time mean / 95th percentile [s]."""
+    counts = Counter(r.outcome for r in runs)
+    outcomes: dict[str, int] = {o: counts[o] for o in OUTCOMES if counts[o]}
+    if not runs:
+        return MonteCarloReport(0, seed, outcomes)
+    times = np.array([r.time for r in runs])
+    return MonteCarloReport(
+        len(runs), seed, outcomes, float(np.mean(times)), float(np.percentile(times, 95))
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# Workers
+
+_WORKER: ReplayContext | None = None
+
+
+def _init_worker(
+    program_text: str,
+    task: TaskSpec,
+    filename: str,
+    base_dir: str | None,
+    options: ReplayOptions,
+) -> None:
+    global _WORKER
+    _WORKER = build_context(
+        program_text, task, filename=filename, base_dir=base_dir, options=options
+    )
+
+
+def _run_chunk(seed: int, start: int, stop: int) -> list[RunReport]:
+    assert _WORKER is not None, "worker not initialised"
+    return [run_trial(_WORKER, seed, i) for i in range(start, stop)]
+
+
+def _chunks(trials: int, workers: int) -> list[tuple[int, int]]:
+    size = max(1, min(25, math.ceil(trials / (8 * workers))))
+    return [(i, min(i + size, trials)) for i in range(0, trials, size)]
+
+
+def _monte_carlo_parallel(
+    program_text: str,
+    context: ReplayContext,
+    filename: str,
+    base_dir: str | None,
+    trials: int,
+    seed: int,
+    workers: int,
+    progress: Progress | None,
+) -> list[RunReport]:
+    results: list[RunReport | None] = [None] * trials
+    done = 0
+    with ProcessPoolExecutor(
+        max_workers=workers,
+        mp_context=multiprocessing.get_context("spawn"),
+        initializer=_init_worker,
+        initargs=(program_text, context.spec, filename, base_dir, context.options),
+    ) as pool:
+        pending: dict[Future[list[RunReport]], tuple[int, int]] = {
+            pool.submit(_run_chunk, seed, a, b): (a, b) for a, b in _chunks(trials, workers)
+        }
+        while pending:
+            finished, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for future in finished:
+                a, b = pending.pop(future)
+                results[a:b] = future.result()
+                done += b - a
+                if progress is not None:
+                    progress(done, trials)
+    assert all(r is not None for r in results)
+    return [r for r in results if r is not None]
+
+
+def replay(
+    program_text: str,
+    task: TaskSpec | str | Path,
+    *,
+    trials: int = 0,
+    seed: int = 0,
+    workers: int = 1,
+    filename: str = "<al>",
+    base_dir: str | Path | None = None,
+    options: ReplayOptions | None = None,
+    progress: Progress | None = None,
+) -> ReplayReport:
+    """Replay ``program_text`` on ``task``: the nominal run and ``trials`` Monte Carlo trials.
+
+    ``seed`` seeds the trials (:func:`trial_seed`); ``workers`` processes run them (1: in this
+    process). Raises ALSyntaxError for a program that does not parse and SpecError (or another
+    :class:`~synth.exceptions.SynthError`) for an unusable task.
+    """
+    if trials < 0:
+        raise ValueError(f"trials must be ≥ 0, got {trials}")
+    if isinstance(task, str | Path) and base_dir is None:
+        base_dir = Path(task).resolve().parent
+    context = build_context(
+        program_text, task, filename=filename, base_dir=base_dir, options=options
+    )
+    nominal = run_nominal(context)
+    runs: list[RunReport]
+    if trials and workers > 1:
+        runs = _monte_carlo_parallel(
+            program_text,
+            context,
+            filename,
+            None if base_dir is None else str(base_dir),
+            trials,
+            seed,
+            workers,
+            progress,
+        )
+    else:
+        runs = []
+        for i in range(trials):
+            runs.append(run_trial(context, seed, i))
+            if progress is not None:
+                progress(i + 1, trials)
+    return ReplayReport(filename, context.spec.name, nominal, summarise(runs, seed), tuple(runs))
+
+
+replay_program = replay
+"""The entry point the HTTP service looks up (``server/service.py``)."""
