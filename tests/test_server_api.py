@@ -441,3 +441,26 @@ def test_replay_of_a_spec_that_does_not_validate_is_422(client: TestClient) -> N
         client.post("/v1/replays", json={"program": "BEGIN END", "spec": {"name": "t"}}), 422
     )
     assert body["path"] == "frames"
+
+
+@needs_planner
+def test_plan_document_is_synth_plan_json_plus_the_servers_keys(
+    client: TestClient, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from synth.cli import main
+
+    assert main(["plan", str(SEED), "--json"]) == 0
+    cli = json.loads(capsys.readouterr().out)
+    served = client.post("/v1/plans?validate=false", content=SEED_TEXT, headers=YAML).json()
+    assert set(cli) <= set(served)
+    assert set(served) - set(cli) <= {
+        "id",
+        "task",
+        "created_at",
+        "content_hash",
+        "options",
+        "validation",
+        "links",
+    }
+    for key in set(cli) - {"planning_time", "counters"}:
+        assert served[key] == cli[key], key
