@@ -76,7 +76,6 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from synth.al.machine import (
-    DurationConstraint,
     DurationMonitor,
     EventMonitor,
     ForceMonitor,
@@ -85,7 +84,6 @@ from synth.al.machine import (
     MotionResult,
     OpeningMonitor,
     TorqueMonitor,
-    relation_holds,
 )
 from synth.models.arm import (
     FINGERS,
@@ -105,6 +103,19 @@ from synth.models.arm.bodies import Body
 from synth.models.arm.sweep import body_motion_bounds
 from synth.replay.capture import inserted_depth, seat_depth, seated_pose, tip_placement
 from synth.replay.contact import first_contact, guided_motion, scrape
+from synth.replay.motion import (
+    Checkpoint,
+    Motion,
+    MotionState,
+    Phase,
+    Segment,
+    Slide,
+    Stop,
+    crossing_level,
+    point_on,
+    push_reaction,
+    segment_times,
+)
 from synth.replay.reach import ReachProblem, describe_pose, solve_near
 from synth.replay.report import Violation, ViolationKind
 from synth.replay.scene import HoleSite, PinModel, Workcell
@@ -174,242 +185,6 @@ class PinState:
 
 
 # --------------------------------------------------------------------------------------------
-# Motion plans
-
-
-def _quintic(tau: float) -> float:
-    """s(τ) = 10τ³ − 15τ⁴ + 6τ⁵, the rest-to-rest quintic time law."""
-    tau = min(max(tau, 0.0), 1.0)
-    return tau * tau * tau * (10.0 + tau * (-15.0 + 6.0 * tau))
-
-
-def _quintic_inverse(s: float) -> float:
-    """τ with s(τ) = s (bisection; s is increasing on [0, 1])."""
-    s = min(max(s, 0.0), 1.0)
-    lo, hi = 0.0, 1.0
-    for _ in range(50):
-        mid = 0.5 * (lo + hi)
-        if _quintic(mid) < s:
-            lo = mid
-        else:
-            hi = mid
-    return 0.5 * (lo + hi)
-
-
-@dataclass(frozen=True, eq=False)
-class _Slide:
-    """A pin sliding along ``obstacle``.
-
-    ``normal``: the surface normal (world, towards the pin); ``pin_point``: the pin's contact
-    point (pin frame) [m]; ``origin``: where that point was when the slide began (world) [m].
-    """
-
-    obstacle: Obstacle
-    normal: NDArray[np.float64]
-    pin_point: NDArray[np.float64]
-    origin: NDArray[np.float64]
-
-    def deflection(self, pin_pose: pin.SE3) -> float:
-        """How far [m] the arm yields along the normal: δ = max(0, −n·(P x − x₀))."""
-        return max(0.0, -float(self.normal @ (pin_pose.act(self.pin_point) - self.origin)))
-
-
-@dataclass(frozen=True, eq=False)
-class _Phase:
-    """How the held pin moves from path parameter ``start`` on.
-
-    Free, guided by ``hole``, or sliding (``slide``).
-    """
-
-    start: float
-    hole: HoleSite | None = None
-    slide: _Slide | None = None
-
-
-@dataclass(eq=False)
-class _Segment:
-    """One straight joint-space segment q0 → q1, its hand errors and its timing."""
-
-    q0: NDArray[np.float64]
-    q1: NDArray[np.float64]
-    e0: pin.SE3
-    e1: pin.SE3
-    t0: float
-    duration: float
-    phases: list[_Phase] = field(default_factory=list)
-
-    def q(self, s: float) -> NDArray[np.float64]:
-        return self.q0 + s * (self.q1 - self.q0)
-
-    def __post_init__(self) -> None:
-        turn = pin.log3(self.e0.rotation.T @ self.e1.rotation)
-        self._angle = float(np.linalg.norm(turn))
-        self._axis = turn / self._angle if self._angle > 0.0 else np.zeros(3)
-        self._skew = pin.skew(self._axis)
-        self._r0 = np.array(self.e0.rotation)
-        self._t0 = np.array(self.e0.translation)
-        self._shift = np.array(self.e1.translation) - self._t0
-
-    def error_rt(self, s: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """(R, t) of the hand error at ``s``: R₀·exp(s·log(R₀ᵀR₁)), t₀ + s·(t₁ − t₀).
-
-        The same path as :func:`synth.al.machine.interpolate`, with Rodrigues' formula.
-        """
-        if self._angle == 0.0:
-            return self._r0, self._t0 + s * self._shift
-        a = s * self._angle
-        k = self._skew
-        turn = np.eye(3) + math.sin(a) * k + (1.0 - math.cos(a)) * (k @ k)
-        return self._r0 @ turn, self._t0 + s * self._shift
-
-    def error(self, s: float) -> pin.SE3:
-        """The hand error at ``s`` as an SE3."""
-        rotation, translation = self.error_rt(s)
-        return pin.SE3(rotation, translation)
-
-    def time(self, s: float) -> float:
-        return self.t0 + (self.duration * _quintic_inverse(s) if self.duration > 0 else 0.0)
-
-    def s_at(self, t: float) -> float:
-        if self.duration <= 0:
-            return 1.0
-        return _quintic((t - self.t0) / self.duration)
-
-    def phase_at(self, s: float) -> _Phase:
-        phase = self.phases[0] if self.phases else _Phase(0.0)
-        for candidate in self.phases:
-            if candidate.start <= s:
-                phase = candidate
-        return phase
-
-
-@dataclass(frozen=True, eq=False)
-class _State:
-    """The machine state at one instant of a motion."""
-
-    q: NDArray[np.float64] | None
-    hint: NDArray[np.float64]
-    sensed: pin.SE3
-    error: pin.SE3
-    pin_pose: pin.SE3 | None
-    hole: HoleSite | None
-    depth: float
-    opening: float
-
-
-@dataclass(frozen=True)
-class _Checkpoint:
-    """An instant [s] where monitors are checked; ``level`` [N] of the contact force ramp."""
-
-    elapsed: float
-    level: float | None = None
-    violation: Violation | None = None
-
-
-@dataclass(eq=False)
-class _Motion:
-    kind: Literal["move", "open", "close", "center"]
-    line: int
-    monitors: tuple[MonitorSpec, ...]
-    start_time: float
-    end: float
-    checkpoints: list[_Checkpoint]
-    state_at: Callable[[float], _State]
-    arrives: bool
-    stop: _Stop | None = None
-    normal: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
-    lever: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
-    finish: Callable[[], None] | None = None
-    cursor: int = 0
-    fired: set[int] = field(default_factory=set)
-    detected: bool = False
-
-
-def _segment_times(durations: list[float], constraints: Sequence[MotionConstraint]) -> list[float]:
-    """Stretch or squeeze segment times [s] to satisfy ``WITH DURATION`` constraints."""
-    times = list(durations)
-    whole = []
-    for c in constraints:
-        if not isinstance(c, DurationConstraint):
-            continue
-        if c.segment is None:
-            whole.append(c)
-        elif 0 <= c.segment < len(times):
-            times[c.segment] = _apply_duration(times[c.segment], c)
-    total = sum(times)
-    for c in whole:
-        wanted = _apply_duration(total, c)
-        if total > 0 and wanted != total:
-            times = [t * wanted / total for t in times]
-            total = wanted
-        elif total == 0 and wanted > 0 and times:
-            times[-1] = wanted
-            total = wanted
-    return times
-
-
-def _apply_duration(time: float, c: DurationConstraint) -> float:
-    if c.relation in (">", "≥"):
-        return max(time, c.seconds)
-    if c.relation in ("<", "≤"):
-        return min(time, c.seconds)
-    if c.relation == "=":
-        return c.seconds
-    return time
-
-
-def _crossing_level(
-    value_per_newton: float, relation: str, threshold: float, stall: float
-) -> float | None:
-    """Smallest force level L ∈ (0, stall] [N] at which ``L·c rel threshold`` holds, or None."""
-    candidates = [1e-9, stall]
-    if value_per_newton != 0.0:
-        exact = threshold / value_per_newton
-        candidates.append(exact + max(abs(exact) * 1e-12, 1e-12))
-    for level in sorted(c for c in candidates if 0.0 < c <= stall):
-        if relation_holds(level * value_per_newton, relation, threshold):  # type: ignore[arg-type]
-            return level
-    return None
-
-
-@dataclass(frozen=True, eq=False)
-class _Stop:
-    """Where a motion ends early: at ``s`` of its last segment, by a contact or a violation.
-
-    ``body`` touched ``obstacle`` at ``point`` [m]; ``reaction`` is the unit direction of the
-    force on the hand (opposite to the motion of the touching point: a blocked arm pushes
-    along its path).
-    """
-
-    s: float
-    kind: Literal["seat", "surface", "violation"]
-    body: str
-    obstacle: str
-    point: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
-    reaction: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
-    violation: Violation | None = None
-    note: str = ""
-
-
-def _point_on(
-    pose_at: Callable[[float], pin.SE3], point: NDArray[np.float64], s: float
-) -> NDArray[np.float64]:
-    """World position at ``s`` of ``point`` fixed in the moving frame ``pose_at``."""
-    return np.asarray(pose_at(s).act(point), dtype=float)
-
-
-def _reaction(position: Callable[[float], NDArray[np.float64]], s: float) -> NDArray[np.float64]:
-    """−(direction of motion) of a point at ``s`` (finite difference); +ẑ if it is at rest."""
-    step = 1e-4
-    a, b = (s - step, s) if s >= step else (s, s + step)
-    velocity = np.asarray(position(b), dtype=float) - np.asarray(position(a), dtype=float)
-    norm = float(np.linalg.norm(velocity))
-    if norm < 1e-12:
-        return np.array([0.0, 0.0, 1.0])
-    return -velocity / norm
-
-
-# --------------------------------------------------------------------------------------------
 # The machine
 
 
@@ -456,7 +231,7 @@ class ReplayMachine:
         self._sensed = arm.forward(self._q)
         self._force = np.zeros(3)
         self._torque = np.zeros(3)
-        self._motion: _Motion | None = None
+        self._motion: Motion | None = None
         self._scene: CollisionScene | None = None
         hand_frame = arm.model.frames[arm.hand_frame]
         self._hand_joint = int(hand_frame.parentJoint)
@@ -532,7 +307,7 @@ class ReplayMachine:
     def _invalidate(self) -> None:
         self._scene = None
 
-    def _pin_speed(self, state: PinState, segment: _Segment) -> float:
+    def _pin_speed(self, state: PinState, segment: Segment) -> float:
         """Bound [m per unit s] on the speed of every point of the held pin along ``segment``."""
         assert state.grip is not None
         body = Body(
@@ -570,12 +345,12 @@ class ReplayMachine:
 
     # ---- the state along a move
 
-    def _state(self, segment: _Segment, s: float, held: PinState | None) -> _State:
+    def _state(self, segment: Segment, s: float, held: PinState | None) -> MotionState:
         q = segment.q(s)
         reading = self.arm.forward(q)
         error = segment.error(s)
         if held is None:
-            return _State(q, q, reading, error, None, None, 0.0, self._opening)
+            return MotionState(q, q, reading, error, None, None, 0.0, self._opening)
         assert held.grip is not None
         commanded = reading * error * held.grip
         phase = segment.phase_at(s)
@@ -583,17 +358,17 @@ class ReplayMachine:
             shift = phase.slide.deflection(commanded) * phase.slide.normal
             pose = pin.SE3(commanded.rotation, commanded.translation + shift)
             sensed = pose * held.grip.inverse() * error.inverse()
-            return _State(None, q, sensed, error, pose, None, 0.0, self._opening)
+            return MotionState(None, q, sensed, error, pose, None, 0.0, self._opening)
         hole = phase.hole
         if hole is None:
-            return _State(q, q, reading, error, commanded, None, 0.0, self._opening)
+            return MotionState(q, q, reading, error, commanded, None, 0.0, self._opening)
         seat = seat_depth(hole, held.model)
         depth = min(max(-tip_placement(hole, commanded).axial, 0.0), seat)
         pose = seated_pose(hole, depth, commanded)
         sensed = pose * held.grip.inverse() * error.inverse()
-        return _State(None, q, sensed, error, pose, hole, depth, self._opening)
+        return MotionState(None, q, sensed, error, pose, hole, depth, self._opening)
 
-    def _apply(self, state: _State) -> None:
+    def _apply(self, state: MotionState) -> None:
         if state.q is not None:
             self._q = state.q.copy()
         else:
@@ -638,13 +413,13 @@ class ReplayMachine:
         durations = [0.0] * len(targets)
         if any(np.any(b != a) for a, b in itertools.pairwise(configurations)):
             durations = list(motion_time(self.arm.limits, configurations).segments)
-        durations = _segment_times(durations, constraints)
+        durations = segment_times(durations, constraints)
         errors = [self._error] + [self.hand_errors.next() for _ in targets]
         segments = []
         t = 0.0
         for k in range(len(targets)):
             segments.append(
-                _Segment(
+                Segment(
                     configurations[k],
                     configurations[k + 1],
                     errors[k],
@@ -663,22 +438,22 @@ class ReplayMachine:
 
     def _plan(
         self,
-        segments: list[_Segment],
+        segments: list[Segment],
         held: PinState | None,
         monitors: tuple[MonitorSpec, ...],
         line: int,
-    ) -> _Motion:
+    ) -> Motion:
         """Walk the segments: pin contacts, guidance and arm sweeps; the motion's timeline."""
         options = self.options
         scene = self.scene()
         hole = held.hole if held is not None else None
-        slide: _Slide | None = None
+        slide: Slide | None = None
         obstacles = self._obstacles()
-        stop: _Stop | None = None
+        stop: Stop | None = None
         end_segment = len(segments) - 1
         for index, seg in enumerate(segments):
-            seg.phases = [_Phase(0.0, hole, slide)]
-            pin_stop: _Stop | None = None
+            seg.phases = [Phase(0.0, hole, slide)]
+            pin_stop: Stop | None = None
             s = 0.0
             while held is not None and s < 1.0 and pin_stop is None:
                 grip = held.grip
@@ -688,7 +463,7 @@ class ReplayMachine:
 
                 def commanded(
                     x: float,
-                    seg: _Segment = seg,
+                    seg: Segment = seg,
                     r_g: NDArray[np.float64] = r_g,
                     t_g: NDArray[np.float64] = t_g,
                 ) -> pin.SE3:
@@ -711,10 +486,10 @@ class ReplayMachine:
                     )
                     if end.kind == "exit":
                         hole, s = None, end.s
-                        seg.phases.append(_Phase(s))
+                        seg.phases.append(Phase(s))
                     elif end.kind == "bottom":
                         tip = seated_pose(hole, end.depth, commanded(end.s)).translation
-                        pin_stop = _Stop(end.s, "seat", held.model.name, hole.name, tip, hole.axis)
+                        pin_stop = Stop(end.s, "seat", held.model.name, hole.name, tip, hole.axis)
                     elif end.kind == "jam":
                         detail = (
                             f"{held.model.name} jammed in {hole.name}: the motion drags it "
@@ -723,7 +498,7 @@ class ReplayMachine:
                         violation = self._violation(
                             "collision", line, detail, self._time + seg.time(end.s)
                         )
-                        pin_stop = _Stop(
+                        pin_stop = Stop(
                             end.s, "violation", held.model.name, hole.name, violation=violation
                         )
                     else:
@@ -745,16 +520,16 @@ class ReplayMachine:
                     )
                     if slid.kind == "free":
                         slide, s = None, slid.s
-                        seg.phases.append(_Phase(s))
+                        seg.phases.append(Phase(s))
                     elif slid.kind == "jam":
                         pin_point = current.pin_point
-                        pin_stop = _Stop(
+                        pin_stop = Stop(
                             slid.s,
                             "surface",
                             held.model.name,
                             current.obstacle.name,
                             commanded(slid.s).act(pin_point),
-                            _reaction(partial(_point_on, commanded, pin_point), slid.s),
+                            push_reaction(partial(point_on, commanded, pin_point), slid.s),
                             note=f"slid along it and jammed, {100 * slid.deflection:.2f} cm in",
                         )
                     else:
@@ -774,20 +549,20 @@ class ReplayMachine:
                 elif found.kind == "capture":
                     assert found.hole is not None
                     hole, s = found.hole, found.s
-                    seg.phases.append(_Phase(s, hole))
+                    seg.phases.append(Phase(s, hole))
                 else:
                     local = found.pin_point
-                    reaction = _reaction(partial(_point_on, commanded, local), found.s)
+                    reaction = push_reaction(partial(point_on, commanded, local), found.s)
                     into = float(reaction @ found.normal)  # the push's component into the surface
                     if into < math.sin(options.slide_angle):
                         # a grazing push: the pin slides along the surface, the arm yields
                         touched = next(o for o in obstacles if o.name == found.obstacle)
                         origin = commanded(found.s).act(local)
-                        slide = _Slide(touched, found.normal, local, origin)
+                        slide = Slide(touched, found.normal, local, origin)
                         s = found.s
-                        seg.phases.append(_Phase(s, slide=slide))
+                        seg.phases.append(Phase(s, slide=slide))
                     else:
-                        pin_stop = _Stop(
+                        pin_stop = Stop(
                             found.s,
                             "surface",
                             held.model.name,
@@ -804,23 +579,23 @@ class ReplayMachine:
         last = segments[end_segment]
         end_time = last.time(end_s)
 
-        def locate(elapsed: float) -> tuple[_Segment, float]:
+        def locate(elapsed: float) -> tuple[Segment, float]:
             for k, seg in enumerate(segments[: end_segment + 1]):
                 if elapsed <= seg.t0 + seg.duration or k == end_segment:
                     s = seg.s_at(elapsed)
                     return seg, (min(s, end_s) if k == end_segment else s)
             return last, end_s
 
-        def state_at(elapsed: float) -> _State:
+        def state_at(elapsed: float) -> MotionState:
             seg, s = locate(elapsed)
             return self._state(seg, s, held)
 
-        checkpoints = [_Checkpoint(0.0), *self._duration_checkpoints(monitors, end_time)]
-        motion = _Motion(
+        checkpoints = [Checkpoint(0.0), *self._duration_checkpoints(monitors, end_time)]
+        motion = Motion(
             "move", line, monitors, self._time, end_time, checkpoints, state_at, stop is None
         )
         if stop is not None and stop.violation is not None:
-            motion.checkpoints.append(_Checkpoint(end_time, violation=stop.violation))
+            motion.checkpoints.append(Checkpoint(end_time, violation=stop.violation))
         elif stop is not None:
             final = state_at(end_time)
             hand = final.sensed * final.error
@@ -828,7 +603,7 @@ class ReplayMachine:
             motion.normal = np.asarray(stop.reaction, dtype=float)
             motion.lever = np.asarray(stop.point - hand.translation, dtype=float)
             for level in self._ramp_levels(monitors, motion.normal, motion.lever):
-                motion.checkpoints.append(_Checkpoint(end_time, level=level))
+                motion.checkpoints.append(Checkpoint(end_time, level=level))
         motion.checkpoints.sort(key=lambda c: (c.elapsed, -1.0 if c.level is None else c.level))
         return motion
 
@@ -846,7 +621,7 @@ class ReplayMachine:
             return options
         return SweepOptions(clearance=max(0.5 * start, 0.0), max_checks=options.max_checks)
 
-    def _sweep(self, scene: CollisionScene, seg: _Segment, limit: float, line: int) -> _Stop | None:
+    def _sweep(self, scene: CollisionScene, seg: Segment, limit: float, line: int) -> Stop | None:
         """Sweep the arm and hand over s ∈ [0, limit] of ``seg``: the first stop, if any.
 
         A palm or finger pushed along a surface at a grazing angle slides: its pair is left out
@@ -860,7 +635,7 @@ class ReplayMachine:
                 return None
             s_hit = start + sweep.s * (limit - start)
             found = self._sweep_stop(scene, seg, start, s_hit, limit, sweep, line)
-            if isinstance(found, _Stop):
+            if isinstance(found, Stop):
                 return found
             s_free, pair = found
             relaxed = CollisionScene(
@@ -876,7 +651,7 @@ class ReplayMachine:
             if not inner.free:
                 s_in = s_hit + inner.s * (s_free - s_hit)
                 found = self._sweep_stop(relaxed, seg, s_hit, s_in, s_free, inner, line, False)
-                assert isinstance(found, _Stop)
+                assert isinstance(found, Stop)
                 return found
             start = s_free
         return None
@@ -884,14 +659,14 @@ class ReplayMachine:
     def _sweep_stop(
         self,
         scene: CollisionScene,
-        seg: _Segment,
+        seg: Segment,
         start: float,
         s_hit: float,
         limit: float,
         sweep: SweepResult,
         line: int,
         slide: bool = True,
-    ) -> _Stop | tuple[float, tuple[str, str]]:
+    ) -> Stop | tuple[float, tuple[str, str]]:
         """What the sweep's first close pair means.
 
         A violation (an arm link), a sensed contact of the palm or a finger, or their slide,
@@ -907,7 +682,7 @@ class ReplayMachine:
                 f"{describe_pose(self.arm.forward(sweep.q))}"
             )
             violation = self._violation("collision", line, detail, self._time + seg.time(s_hit))
-            return _Stop(s_hit, "violation", a, b, violation=violation)
+            return Stop(s_hit, "violation", a, b, violation=violation)
         # the palm or a finger touches the workcell: the wrist sensor feels it
         k = scene.pairs.index((a, b)) if (a, b) in scene.pairs else scene.pairs.index((b, a))
         point, on_body, normal = self._pair_contact(scene, seg.q(s_hit), a, b)
@@ -916,7 +691,7 @@ class ReplayMachine:
         def body_point(x: float) -> NDArray[np.float64]:
             return np.asarray(scene.body_pose(seg.q(x), a).act(local), dtype=float)
 
-        reaction = _reaction(body_point, s_hit)
+        reaction = push_reaction(body_point, s_hit)
         options = self.options
         note = ""
         if slide and float(reaction @ normal) < math.sin(options.slide_angle):
@@ -935,7 +710,7 @@ class ReplayMachine:
             else:
                 return limit, (a, b)
         s_stop = self._back_off(scene, seg, start, s_hit, k)
-        return _Stop(s_stop, "surface", a, b, point, reaction, note=note)
+        return Stop(s_stop, "surface", a, b, point, reaction, note=note)
 
     @staticmethod
     def _pair_distance(scene: CollisionScene, q: NDArray[np.float64], k: int) -> float:
@@ -947,7 +722,7 @@ class ReplayMachine:
         return float(scene.geometry_data.distanceResults[k].min_distance)
 
     def _back_off(
-        self, scene: CollisionScene, seg: _Segment, start: float, s_hit: float, k: int
+        self, scene: CollisionScene, seg: Segment, start: float, s_hit: float, k: int
     ) -> float:
         """A stop in [start, s_hit] where pair ``k`` is at least a quarter clearance apart."""
         quarter = 0.25 * self.options.sweep.clearance
@@ -986,13 +761,13 @@ class ReplayMachine:
 
     def _duration_checkpoints(
         self, monitors: Sequence[MonitorSpec], end: float
-    ) -> list[_Checkpoint]:
+    ) -> list[Checkpoint]:
         out = []
         for m in monitors:
             if isinstance(m, DurationMonitor) and 0.0 <= m.threshold <= end:
-                out.append(_Checkpoint(m.threshold))
-                out.append(_Checkpoint(min(math.nextafter(m.threshold, math.inf), end)))
-        out.append(_Checkpoint(end))
+                out.append(Checkpoint(m.threshold))
+                out.append(Checkpoint(min(math.nextafter(m.threshold, math.inf), end)))
+        out.append(Checkpoint(end))
         return out
 
     def _ramp_levels(
@@ -1007,11 +782,11 @@ class ReplayMachine:
         moment = np.cross(lever, normal)
         for m in monitors:
             if isinstance(m, ForceMonitor):
-                level = _crossing_level(
+                level = crossing_level(
                     float(np.dot(m.direction, normal)), m.relation, m.threshold, stall
                 )
             elif isinstance(m, TorqueMonitor):
-                level = _crossing_level(
+                level = crossing_level(
                     float(np.dot(m.axis, moment)), m.relation, m.threshold, stall
                 )
             else:
@@ -1054,27 +829,29 @@ class ReplayMachine:
         line: int,
     ) -> MotionResult:
         self._check_idle()
-        duration = _segment_times([self.options.hand_time], constraints)[0]
+        duration = segment_times([self.options.hand_time], constraints)[0]
         start, here = self._opening, self.hand_pose()
         error = self._error
         self._force = np.zeros(3)
         self._torque = np.zeros(3)
 
-        def state_at(elapsed: float) -> _State:
+        def state_at(elapsed: float) -> MotionState:
             fraction = 1.0 if duration <= 0 else min(elapsed / duration, 1.0)
             q = self._q
-            return _State(q, q, here, error, None, None, 0.0, start + fraction * (final - start))
+            return MotionState(
+                q, q, here, error, None, None, 0.0, start + fraction * (final - start)
+            )
 
-        checkpoints = [_Checkpoint(0.0), *self._duration_checkpoints(monitors, duration)]
+        checkpoints = [Checkpoint(0.0), *self._duration_checkpoints(monitors, duration)]
         for m in monitors:
             if isinstance(m, OpeningMonitor) and final != start:
                 fraction = (m.threshold - start) / (final - start)
                 if 0.0 <= fraction <= 1.0:
                     t = fraction * duration
-                    checkpoints.append(_Checkpoint(t))
-                    checkpoints.append(_Checkpoint(min(math.nextafter(t, math.inf), duration)))
+                    checkpoints.append(Checkpoint(t))
+                    checkpoints.append(Checkpoint(min(math.nextafter(t, math.inf), duration)))
         checkpoints.sort(key=lambda c: c.elapsed)
-        self._motion = _Motion(
+        self._motion = Motion(
             kind, line, tuple(monitors), self._time, duration, checkpoints, state_at, True
         )
         self._motion.finish = finish
@@ -1187,7 +964,7 @@ class ReplayMachine:
         self._note_rest(motion, checkpoint.level is not None)
 
     def _sensor_values(
-        self, motion: _Motion, checkpoint: _Checkpoint, state: _State
+        self, motion: Motion, checkpoint: Checkpoint, state: MotionState
     ) -> tuple[NDArray[np.float64], NDArray[np.float64], float]:
         if checkpoint.level is None:
             return np.zeros(3), np.zeros(3), state.opening
@@ -1254,7 +1031,7 @@ class ReplayMachine:
             motion.finish()
         return MotionResult(None, motion.arrives, self.hand_pose(), self._time)
 
-    def _show(self, motion: _Motion, checkpoint: _Checkpoint, state: _State) -> None:
+    def _show(self, motion: Motion, checkpoint: Checkpoint, state: MotionState) -> None:
         """Present the paused instant: clock, hand reading, opening and sensed force."""
         self._time = motion.start_time + checkpoint.elapsed
         self._sensed = pin.SE3(state.sensed)
@@ -1262,7 +1039,7 @@ class ReplayMachine:
         force, torque, _ = self._sensor_values(motion, checkpoint, state)
         self._force, self._torque = force, torque
 
-    def _settle(self, motion: _Motion, elapsed: float) -> None:
+    def _settle(self, motion: Motion, elapsed: float) -> None:
         """End the motion ``elapsed`` [s] after it started: the arm, hand and pin stay there."""
         state = motion.state_at(elapsed)
         self._time = motion.start_time + elapsed
@@ -1271,7 +1048,7 @@ class ReplayMachine:
         self._force = np.zeros(3)
         self._torque = np.zeros(3)
 
-    def _note_rest(self, motion: _Motion, at_contact: bool) -> None:
+    def _note_rest(self, motion: Motion, at_contact: bool) -> None:
         held, stop = self.held_pin(), motion.stop
         if (
             held is not None

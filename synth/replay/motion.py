@@ -1,0 +1,288 @@
+"""One motion of the replay's arm: its segments, how the held pin moves along them, its timeline.
+
+A ``MOVE`` becomes straight joint-space :class:`Segment` s between the inverse-kinematics
+solutions of its targets, each with the hand positioning errors at its ends and a quintic time
+law (seed L3846: AL's 5th-order polynomials). Along a segment the held pin flies free, is guided
+by a hole, or slides along a surface (:class:`Phase`). A :class:`Motion` is the timeline the
+machine plays back: instants where monitors are checked (:class:`Checkpoint`), the state at any
+instant (:class:`MotionState`), and how it ends early (:class:`Stop`). Units: [m], [rad], [s],
+[N].
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+import pinocchio as pin
+from numpy.typing import NDArray
+
+from synth.al.machine import DurationConstraint, MonitorSpec, MotionConstraint, relation_holds
+from synth.models.arm import Obstacle
+from synth.replay.report import Violation
+from synth.replay.scene import HoleSite
+
+__all__ = [
+    "Checkpoint",
+    "Motion",
+    "MotionState",
+    "Phase",
+    "Segment",
+    "Slide",
+    "Stop",
+    "crossing_level",
+    "point_on",
+    "push_reaction",
+    "quintic",
+    "quintic_inverse",
+    "segment_times",
+]
+
+
+def quintic(tau: float) -> float:
+    """s(τ) = 10τ³ − 15τ⁴ + 6τ⁵, the rest-to-rest quintic time law."""
+    tau = min(max(tau, 0.0), 1.0)
+    return tau * tau * tau * (10.0 + tau * (-15.0 + 6.0 * tau))
+
+
+def quintic_inverse(s: float) -> float:
+    """τ with s(τ) = s (bisection; s is increasing on [0, 1])."""
+    s = min(max(s, 0.0), 1.0)
+    lo, hi = 0.0, 1.0
+    for _ in range(50):
+        mid = 0.5 * (lo + hi)
+        if quintic(mid) < s:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
+
+
+@dataclass(frozen=True, eq=False)
+class Slide:
+    """A pin sliding along ``obstacle``.
+
+    ``normal``: the surface normal (world, towards the pin); ``pin_point``: the pin's contact
+    point (pin frame) [m]; ``origin``: where that point was when the slide began (world) [m].
+    """
+
+    obstacle: Obstacle
+    normal: NDArray[np.float64]
+    pin_point: NDArray[np.float64]
+    origin: NDArray[np.float64]
+
+    def deflection(self, pin_pose: pin.SE3) -> float:
+        """How far [m] the arm yields along the normal: δ = max(0, −n·(P x − x₀))."""
+        return max(0.0, -float(self.normal @ (pin_pose.act(self.pin_point) - self.origin)))
+
+
+@dataclass(frozen=True, eq=False)
+class Phase:
+    """How the held pin moves from path parameter ``start`` on.
+
+    Free, guided by ``hole``, or sliding (``slide``).
+    """
+
+    start: float
+    hole: HoleSite | None = None
+    slide: Slide | None = None
+
+
+@dataclass(eq=False)
+class Segment:
+    """One straight joint-space segment q0 → q1, its hand errors and its timing."""
+
+    q0: NDArray[np.float64]
+    q1: NDArray[np.float64]
+    e0: pin.SE3
+    e1: pin.SE3
+    t0: float
+    duration: float
+    phases: list[Phase] = field(default_factory=list)
+
+    def q(self, s: float) -> NDArray[np.float64]:
+        """The configuration at ``s`` ∈ [0, 1]: q0 + s·(q1 − q0) [rad | m]."""
+        return self.q0 + s * (self.q1 - self.q0)
+
+    def __post_init__(self) -> None:
+        turn = pin.log3(self.e0.rotation.T @ self.e1.rotation)
+        self._angle = float(np.linalg.norm(turn))
+        self._axis = turn / self._angle if self._angle > 0.0 else np.zeros(3)
+        self._skew = pin.skew(self._axis)
+        self._r0 = np.array(self.e0.rotation)
+        self._t0 = np.array(self.e0.translation)
+        self._shift = np.array(self.e1.translation) - self._t0
+
+    def error_rt(self, s: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """(R, t) of the hand error at ``s``: R₀·exp(s·log(R₀ᵀR₁)), t₀ + s·(t₁ − t₀).
+
+        The same path as :func:`synth.al.machine.interpolate`, with Rodrigues' formula.
+        """
+        if self._angle == 0.0:
+            return self._r0, self._t0 + s * self._shift
+        a = s * self._angle
+        k = self._skew
+        turn = np.eye(3) + math.sin(a) * k + (1.0 - math.cos(a)) * (k @ k)
+        return self._r0 @ turn, self._t0 + s * self._shift
+
+    def error(self, s: float) -> pin.SE3:
+        """The hand error at ``s`` as an SE3."""
+        rotation, translation = self.error_rt(s)
+        return pin.SE3(rotation, translation)
+
+    def time(self, s: float) -> float:
+        """Time [s] since the motion started at which the segment reaches ``s``."""
+        return self.t0 + (self.duration * quintic_inverse(s) if self.duration > 0 else 0.0)
+
+    def s_at(self, t: float) -> float:
+        """The path parameter ``t`` [s] after the motion started (the quintic time law)."""
+        if self.duration <= 0:
+            return 1.0
+        return quintic((t - self.t0) / self.duration)
+
+    def phase_at(self, s: float) -> Phase:
+        """How the held pin moves at ``s``: the last phase starting at or before it."""
+        phase = self.phases[0] if self.phases else Phase(0.0)
+        for candidate in self.phases:
+            if candidate.start <= s:
+                phase = candidate
+        return phase
+
+
+@dataclass(frozen=True, eq=False)
+class MotionState:
+    """The machine state at one instant of a motion."""
+
+    q: NDArray[np.float64] | None
+    hint: NDArray[np.float64]
+    sensed: pin.SE3
+    error: pin.SE3
+    pin_pose: pin.SE3 | None
+    hole: HoleSite | None
+    depth: float
+    opening: float
+
+
+@dataclass(frozen=True)
+class Checkpoint:
+    """An instant [s] where monitors are checked; ``level`` [N] of the contact force ramp."""
+
+    elapsed: float
+    level: float | None = None
+    violation: Violation | None = None
+
+
+@dataclass(eq=False)
+class Motion:
+    """A motion being played back.
+
+    ``checkpoints`` are visited in order (``cursor``); ``state_at(elapsed)`` gives the state at
+    any instant; ``stop`` says how it ends early (with the force's unit ``normal`` and its
+    ``lever`` from the hand [m]); ``finish`` runs when it ends normally (a grasp, a release);
+    ``fired`` holds the monitors that fired, ``detected`` whether one fired on the contact.
+    """
+
+    kind: Literal["move", "open", "close", "center"]
+    line: int
+    monitors: tuple[MonitorSpec, ...]
+    start_time: float
+    end: float
+    checkpoints: list[Checkpoint]
+    state_at: Callable[[float], MotionState]
+    arrives: bool
+    stop: Stop | None = None
+    normal: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
+    lever: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
+    finish: Callable[[], None] | None = None
+    cursor: int = 0
+    fired: set[int] = field(default_factory=set)
+    detected: bool = False
+
+
+def segment_times(durations: list[float], constraints: Sequence[MotionConstraint]) -> list[float]:
+    """Stretch or squeeze segment times [s] to satisfy ``WITH DURATION`` constraints."""
+    times = list(durations)
+    whole = []
+    for c in constraints:
+        if not isinstance(c, DurationConstraint):
+            continue
+        if c.segment is None:
+            whole.append(c)
+        elif 0 <= c.segment < len(times):
+            times[c.segment] = _apply_duration(times[c.segment], c)
+    total = sum(times)
+    for c in whole:
+        wanted = _apply_duration(total, c)
+        if total > 0 and wanted != total:
+            times = [t * wanted / total for t in times]
+            total = wanted
+        elif total == 0 and wanted > 0 and times:
+            times[-1] = wanted
+            total = wanted
+    return times
+
+
+def _apply_duration(time: float, c: DurationConstraint) -> float:
+    if c.relation in (">", "≥"):
+        return max(time, c.seconds)
+    if c.relation in ("<", "≤"):
+        return min(time, c.seconds)
+    if c.relation == "=":
+        return c.seconds
+    return time
+
+
+def crossing_level(
+    value_per_newton: float, relation: str, threshold: float, stall: float
+) -> float | None:
+    """Smallest force level L ∈ (0, stall] [N] at which ``L·c rel threshold`` holds, or None."""
+    candidates = [1e-9, stall]
+    if value_per_newton != 0.0:
+        exact = threshold / value_per_newton
+        candidates.append(exact + max(abs(exact) * 1e-12, 1e-12))
+    for level in sorted(c for c in candidates if 0.0 < c <= stall):
+        if relation_holds(level * value_per_newton, relation, threshold):  # type: ignore[arg-type]
+            return level
+    return None
+
+
+@dataclass(frozen=True, eq=False)
+class Stop:
+    """Where a motion ends early: at ``s`` of its last segment, by a contact or a violation.
+
+    ``body`` touched ``obstacle`` at ``point`` [m]; ``reaction`` is the unit direction of the
+    force on the hand (opposite to the motion of the touching point: a blocked arm pushes
+    along its path).
+    """
+
+    s: float
+    kind: Literal["seat", "surface", "violation"]
+    body: str
+    obstacle: str
+    point: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
+    reaction: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
+    violation: Violation | None = None
+    note: str = ""
+
+
+def point_on(
+    pose_at: Callable[[float], pin.SE3], point: NDArray[np.float64], s: float
+) -> NDArray[np.float64]:
+    """World position at ``s`` of ``point`` fixed in the moving frame ``pose_at``."""
+    return np.asarray(pose_at(s).act(point), dtype=float)
+
+
+def push_reaction(
+    position: Callable[[float], NDArray[np.float64]], s: float
+) -> NDArray[np.float64]:
+    """−(direction of motion) of a point at ``s`` (finite difference); +ẑ if it is at rest."""
+    step = 1e-4
+    a, b = (s - step, s) if s >= step else (s, s + step)
+    velocity = np.asarray(position(b), dtype=float) - np.asarray(position(a), dtype=float)
+    norm = float(np.linalg.norm(velocity))
+    if norm < 1e-12:
+        return np.array([0.0, 0.0, 1.0])
+    return -velocity / norm
