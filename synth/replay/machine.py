@@ -68,7 +68,7 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import partial
-from typing import Literal
+from typing import Literal, NoReturn
 
 import coal
 import numpy as np
@@ -137,8 +137,9 @@ class ReplayOptions:
     sweep: SweepOptions = field(default_factory=lambda: SweepOptions(clearance=1e-3))
     """Swept checks of the arm, palm and fingers: a pair closer than 1 mm is a collision."""
     compliance: float = 0.01
-    """[m] how far the arm may be dragged sideways while a hole guides the pin [est]: wider
-    than any mouth of the seed's parts (0.57 cm), so no captured pin jams on its own offset."""
+    """[m] how far the arm yields sideways, to a hole guiding the pin or to a surface the pin or
+    a finger slides along [est]: wider than any mouth of the seed's parts (0.57 cm), so no
+    captured pin jams on its own offset."""
     exit_margin: float = 1e-3
     """[m] a withdrawn pin is clear of its hole when its tip is this far above the mouth."""
     hand_time: float = 50 * JIFFY
@@ -275,15 +276,16 @@ class ReplayMachine:
     def _violation(self, kind: ViolationKind, line: int, detail: str, time: float) -> Violation:
         return Violation(kind, line, detail, time)
 
-    def _raise(self, violation: Violation) -> None:
+    def _raise(self, violation: Violation) -> NoReturn:
         self.violations.append(violation)
         self._time = max(self._time, violation.time)
         raise ViolationStop(violation)
 
-    def _obstacles(self, exclude: str | None = None) -> list[Obstacle]:
+    def _obstacles(self) -> list[Obstacle]:
+        """The static solids and every pin the hand does not hold, at their true poses."""
         out = list(self.workcell.obstacles)
-        for frame, state in self.pins.items():
-            if not state.held and frame != exclude:
+        for state in self.pins.values():
+            if not state.held:
                 out.append(Obstacle(state.model.name, state.model.geometry, state.pose))
         return out
 
