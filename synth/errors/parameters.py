@@ -183,7 +183,13 @@ class ParameterSpace:
         return out[:n]
 
     def corners(self) -> np.ndarray:
-        """Every vertex of the bounding box that satisfies the coupled constraints."""
+        """Every vertex of the bounding box that satisfies the coupled constraints.
+
+        There are 2^dim of them; above 20 parameters (a million vertices) this refuses rather
+        than exhaust memory.
+        """
+        if self.dim > 20:
+            raise ValueError(f"{self.dim} parameters have 2^{self.dim} vertices; sample them")
         lo, hi = self.lo, self.hi
         grid = np.array(list(itertools.product((0, 1), repeat=self.dim)), dtype=float)
         v = lo + grid * (hi - lo)
