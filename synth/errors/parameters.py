@@ -35,16 +35,7 @@ class ParameterBlock:
         """Block for a spec uncertainty; ``min ≤ c·v ≤ max`` becomes rows of ``A v ≤ b``."""
         bounds = unc.bounds()
         names = tuple(bounds)
-        rows: list[list[float]] = []
-        rhs: list[float] = []
-        for c in unc.constraints:
-            row = [c.terms.get(n, 0.0) for n in names]
-            if c.max is not None:
-                rows.append(row)
-                rhs.append(c.max)
-            if c.min is not None:
-                rows.append([-x for x in row])
-                rhs.append(-c.min)
+        rows, rhs = unc.constraint_rows()
         return cls(
             owner=owner,
             names=names,

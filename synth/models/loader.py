@@ -129,20 +129,14 @@ def _check_feasible(unc: Uncertainty, loc: PathKey, fail: Any) -> None:
     """Fail if the block's bounds and coupled constraints admit no parameter vector (LP)."""
     if not unc.constraints:
         return
-    names = list(unc.bounds())
     bounds = [(b.lo, b.hi) for b in unc.bounds().values()]
-    rows: list[np.ndarray] = []
-    rhs: list[float] = []
-    for c in unc.constraints:
-        row = np.array([c.terms.get(n, 0.0) for n in names])
-        if c.max is not None:
-            rows.append(row)
-            rhs.append(c.max)
-        if c.min is not None:
-            rows.append(-row)
-            rhs.append(-c.min)
+    rows, rhs = unc.constraint_rows()
     res = linprog(
-        np.zeros(len(names)), A_ub=np.array(rows), b_ub=np.array(rhs), bounds=bounds, method="highs"
+        np.zeros(len(bounds)),
+        A_ub=np.array(rows),
+        b_ub=np.array(rhs),
+        bounds=bounds,
+        method="highs",
     )
     if res.status == 2:
         fail((*loc, "constraints"), "the constraints and bounds admit no error values (infeasible)")

@@ -246,6 +246,21 @@ class Uncertainty(_Model):
         """The bounded parameters in canonical order (x, y, z, rx, ry, rz)."""
         return {p: getattr(self, p) for p in PARAMS if getattr(self, p) is not None}
 
+    def constraint_rows(self) -> tuple[list[list[float]], list[float]]:
+        """``min ≤ c·v ≤ max`` as rows of ``A v ≤ b`` over :meth:`bounds`' order [SI]."""
+        names = list(self.bounds())
+        rows: list[list[float]] = []
+        rhs: list[float] = []
+        for c in self.constraints:
+            row = [c.terms.get(n, 0.0) for n in names]
+            if c.max is not None:
+                rows.append(row)
+                rhs.append(c.max)
+            if c.min is not None:
+                rows.append([-x for x in row])
+                rhs.append(-c.min)
+        return rows, rhs
+
     @model_validator(mode="after")
     def _constraints_use_bounded_params(self) -> Uncertainty:
         bounded = self.bounds()
