@@ -76,7 +76,7 @@ def in_process(text: str, duration: float, trials: int | None) -> Level:
     The same work as one request; ``trials`` None: no replay.
     """
     from synth.codegen.emitter import emit_program
-    from synth.models.graph import AttributeGraph
+    from synth.errors.locate import believed_graph
     from synth.models.loader import parse_task
 
     planner = importlib.import_module("synth.strategies.planner")
@@ -84,7 +84,7 @@ def in_process(text: str, duration: float, trials: int | None) -> Level:
 
     def once() -> None:
         spec = parse_task(unique_spec(text).decode())
-        program = emit_program(planner.plan_task(spec).strategy, AttributeGraph(spec))
+        program = emit_program(planner.plan_task(spec).strategy, believed_graph(spec))
         if replay is not None:
             replay.replay_program(program, spec, trials=trials, seed=0)
 

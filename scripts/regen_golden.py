@@ -72,7 +72,7 @@ def recorded_source() -> str:
 
 def golden_strategy(task: str, source: str = "auto") -> tuple[Any, Any]:
     """The strategy record and attribute graph the golden program of ``task`` comes from."""
-    from synth.models.graph import AttributeGraph
+    from synth.errors.locate import believed_graph
     from synth.models.loader import load_task
 
     path = TASKS_DIR / f"{task}.yaml"
@@ -83,7 +83,7 @@ def golden_strategy(task: str, source: str = "auto") -> tuple[Any, Any]:
         strategy = plan_task(spec, base_dir=path.parent).strategy
     else:
         strategy = seed_records().STRATEGIES[task]()
-    return strategy, AttributeGraph(spec)
+    return strategy, believed_graph(spec)
 
 
 def golden_program(task: str, source: str = "auto") -> str:

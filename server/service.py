@@ -226,12 +226,12 @@ def plan_job(
             + ", ".join(m for m, s in (("planner", planner), ("codegen", emitter)) if s is None)
             + " missing"
         )
-    from synth.models.graph import AttributeGraph
+    from synth.errors.locate import believed_graph
 
     result = planner.plan_task(
         spec, try_harder=options["try_harder"], exhaustive=options["exhaustive"]
     )
-    program = emitter.emit_program(result.strategy, AttributeGraph(spec))
+    program = emitter.emit_program(result.strategy, believed_graph(spec))
     validation = (
         _replay(program, spec, options["trials"], options["seed"]) if options["validate"] else None
     )

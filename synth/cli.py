@@ -63,7 +63,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from synth.codegen.emitter import emit_program
-    from synth.models.graph import AttributeGraph
+    from synth.errors.locate import believed_graph
     from synth.models.loader import load_task
     from synth.report import plan_summary
     from synth.strategies import plan_task
@@ -75,8 +75,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         exhaustive=args.exhaustive,
         base_dir=Path(args.task).resolve().parent,
     )
-    graph = AttributeGraph(spec)
-    program = emit_program(result.strategy, graph, preamble=args.preamble)
+    program = emit_program(result.strategy, believed_graph(spec), preamble=args.preamble)
     if args.output is not None:
         out = Path(args.output)
         try:

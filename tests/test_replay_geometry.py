@@ -19,9 +19,9 @@ from synth.models.arm.collision import Obstacle
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
 from synth.models.meshes import block
+from synth.models.workcell import TABLE, WorkcellModel
 from synth.replay.capture import admissible_tilt, captures, seat_depth, tip_placement
 from synth.replay.contact import first_contact, guided_motion
-from synth.replay.scene import TABLE, WorkcellModel
 from synth.replay.truth import HandErrors, link_error, nominal_world, sample_world
 
 ROOT = Path(__file__).parent.parent

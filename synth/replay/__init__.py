@@ -2,10 +2,11 @@
 
 :func:`replay` runs a program once in the believed world and N times in worlds sampled from
 the task's uncertainty, on the arm model with Coal contact; see :mod:`synth.replay.run`.
-Modules: :mod:`.truth` (sampled worlds, hand errors), :mod:`.scene` (solids), :mod:`.capture`
-(pin–hole geometry), :mod:`.contact` (what the held pin touches), :mod:`.reach` (inverse
-kinematics and why it fails), :mod:`.machine` (the AL machine), :mod:`.report` (results),
-:mod:`.run` (nominal run and Monte Carlo), :mod:`.cli_command` (``synth replay``).
+Modules: :mod:`.truth` (sampled worlds, hand errors), :mod:`.capture` (pin–hole geometry),
+:mod:`.contact` (what the held pin touches), :mod:`.reach` (inverse kinematics and why it
+fails), :mod:`.machine` (the AL machine), :mod:`.report` (results), :mod:`.run` (nominal run and
+Monte Carlo), :mod:`.cli_command` (``synth replay``). The solids are the task's, shared with the
+planner: :mod:`synth.models.workcell`.
 
 Names are imported on first use (PEP 562), so ``import synth.replay.cli_command`` stays light.
 """

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from synth.replay.scene import HoleSite, PinModel
+from synth.models.workcell import HoleSite, PinModel
 
 __all__ = [
     "TipPlacement",

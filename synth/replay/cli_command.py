@@ -109,9 +109,9 @@ def run_replay(args: argparse.Namespace) -> int:
 
     if args.preamble:
         from synth.al.binding import preamble
-        from synth.models.graph import AttributeGraph
+        from synth.errors.locate import believed_graph
 
-        print(preamble(AttributeGraph(load_task(args.task))), end="")
+        print(preamble(believed_graph(load_task(args.task))), end="")
         return 0
     if args.program is None:
         raise SynthError("give the PROGRAM.al to replay (or --preamble to print the binding)")

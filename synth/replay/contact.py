@@ -32,8 +32,8 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from synth.models.arm.collision import Obstacle, convex_hull
+from synth.models.workcell import HoleSite, PinModel
 from synth.replay.capture import captures, tip_placement
-from synth.replay.scene import HoleSite, PinModel
 
 __all__ = ["GuidedEnd", "PinContact", "ScrapeEnd", "first_contact", "guided_motion", "scrape"]
 

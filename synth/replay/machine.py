@@ -101,6 +101,7 @@ from synth.models.arm import (
 )
 from synth.models.arm.bodies import Body
 from synth.models.arm.sweep import body_motion_bounds
+from synth.models.workcell import HoleSite, PinModel, Workcell
 from synth.replay.capture import inserted_depth, seat_depth, seated_pose, tip_placement
 from synth.replay.contact import first_contact, guided_motion, scrape
 from synth.replay.motion import (
@@ -118,7 +119,6 @@ from synth.replay.motion import (
 )
 from synth.replay.reach import ReachProblem, describe_pose, solve_near
 from synth.replay.report import Violation, ViolationKind
-from synth.replay.scene import HoleSite, PinModel, Workcell
 from synth.replay.truth import HandErrors
 
 __all__ = ["PinState", "ReplayMachine", "ReplayOptions", "ViolationStop"]

@@ -22,8 +22,8 @@ from numpy.typing import NDArray
 
 from synth.al.machine import DurationConstraint, MonitorSpec, MotionConstraint, relation_holds
 from synth.models.arm import Obstacle
+from synth.models.workcell import HoleSite
 from synth.replay.report import Violation
-from synth.replay.scene import HoleSite
 
 __all__ = [
     "Checkpoint",

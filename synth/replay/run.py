@@ -41,15 +41,16 @@ from synth.al import ast
 from synth.al.binding import WorldBinding, bind_world
 from synth.al.interpreter import Interpreter
 from synth.al.parser import parse_program
+from synth.errors.locate import believed_graph
 from synth.exceptions import ALRuntimeError, SpecError
 from synth.models.arm import Arm, load_arm
 from synth.models.graph import AttributeGraph, pose_to_se3
 from synth.models.loader import load_task
 from synth.models.spec import TaskSpec
+from synth.models.workcell import WorkcellModel
 from synth.replay.machine import ReplayMachine, ReplayOptions, ViolationStop
 from synth.replay.reach import describe_pose
 from synth.replay.report import OUTCOMES, MonteCarloReport, Outcome, ReplayReport, RunReport
-from synth.replay.scene import WorkcellModel
 from synth.replay.truth import HandErrors, TrueWorld, nominal_world, sample_world
 
 __all__ = [
@@ -119,10 +120,10 @@ def build_context(
             f"the arm cannot reach its park frame {manipulator.park.al_name} "
             f"({describe_pose(park)}), where the replay starts it",
         )
-    graph = AttributeGraph(spec)
+    graph = believed_graph(spec)  # a fixture-held box: where its contacts put it
     return ReplayContext(
         program=program,
-        spec=spec,
+        spec=graph.spec,
         graph=graph,
         binding=bind_world(graph),
         arm=arm,

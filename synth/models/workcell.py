@@ -1,6 +1,8 @@
 """The workcell's solids: a table, boxes with chamfered holes, racks, fixtures and pins.
 
-Built from the task's shapes, placed at the *true* poses of a trial (:mod:`synth.replay.truth`):
+Built from the task's shapes and placed at any set of poses: the *true* poses of a replay trial
+(:mod:`synth.replay.truth`) or the nominal ones the planner believes
+(:func:`nominal_poses`, for its gross-motion check, :mod:`synth.strategies.clearance`):
 
 * the table: a slab whose top face is the world plane z = 0 (the world frame is the work
   station, :data:`synth.models.spec.WORLD`), ``TABLE_THICKNESS`` thick, reaching
@@ -14,7 +16,7 @@ Built from the task's shapes, placed at the *true* poses of a trial (:mod:`synth
 Obstacles are named by the objects' AL names (``BOX``, ``RACK``, ``PIN1``) and ``table``. A
 hole is a :class:`HoleSite`: its true mouth frame (origin at the centre of the mouth, z the
 outward axis, :class:`synth.models.spec.HoleShape`) and its dimensions. Geometry is built once
-per task (:class:`WorkcellModel`) and placed per trial (:meth:`WorkcellModel.place`).
+per task (:class:`WorkcellModel`) and placed per world (:meth:`WorkcellModel.place`).
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ import math
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from functools import partial
+from typing import Protocol
 
 import coal
 import numpy as np
@@ -35,14 +38,15 @@ from synth.models.graph import AttributeGraph
 from synth.models.meshes import box_with_holes
 from synth.models.meshes import pin as pin_mesh
 from synth.models.spec import HoleShape, PinShape
-from synth.replay.truth import TrueWorld
 
 __all__ = [
     "TABLE",
     "TABLE_MARGIN",
     "TABLE_THICKNESS",
     "HoleSite",
+    "NominalPoses",
     "PinModel",
+    "Poses",
     "Workcell",
     "WorkcellModel",
 ]
@@ -55,6 +59,25 @@ TABLE_MARGIN = 0.5
 """[m] how far the slab reaches past every task frame and the arm's base."""
 
 _PLACEMENT_TOLERANCE = 1e-6  # [m], [rad]: a hole must sit on its box's top face this exactly
+
+
+class Poses(Protocol):
+    """World poses of the task's frames: a replay trial's true world, or the nominal one."""
+
+    def pose(self, frame: str) -> pin.SE3:
+        """World pose of ``frame`` [m]."""
+        ...
+
+
+@dataclass(frozen=True, eq=False)
+class NominalPoses:
+    """The believed world: every frame at ``graph.world_from`` (what the planner plans in)."""
+
+    graph: AttributeGraph
+
+    def pose(self, frame: str) -> pin.SE3:
+        """Nominal world pose of ``frame`` [m] (a copy)."""
+        return pin.SE3(self.graph.world_from(frame))
 
 
 @dataclass(frozen=True, eq=False)
@@ -199,7 +222,7 @@ class WorkcellModel:
 
     # ---- placing
 
-    def place(self, world: TrueWorld) -> Workcell:
+    def place(self, world: Poses) -> Workcell:
         """The static solids and holes at the true poses of ``world``."""
         obstacles: list[Obstacle] = [self.table]
         holes: list[HoleSite] = []
@@ -234,7 +257,7 @@ class WorkcellModel:
         return geometry
 
     def _holes_of(
-        self, owner: str, world: TrueWorld
+        self, owner: str, world: Poses
     ) -> list[tuple[tuple[float, float, float, float, float], HoleSite]]:
         """Holes drilled into ``owner``: (x, y, diameter, depth, chamfer) in its frame, site."""
         graph = self.graph
