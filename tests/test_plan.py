@@ -148,7 +148,10 @@ def test_no_strategy_when_the_tilt_is_never_good_enough(tmp_path, capsys) -> Non
     with pytest.raises(NoStrategyError) as info:
         plan_task(parse_task(path.read_text()))
     tilt = [r for _, r in info.value.reasons if "exceeds Δθ_ok" in r]
-    assert len(tilt) == 9  # every candidate reached refinement and failed there
+    # Every candidate with clear gross motions reached refinement and failed there: the 9
+    # pickups that survive ω pruning (3 per γ, L2122) less those whose moves are obstructed.
+    obstructed = [r for _, r in info.value.reasons if " sweeps " in r]
+    assert tilt and len(tilt) + len(obstructed) == 9
     assert main(["plan", str(path)]) == 2
     err = capsys.readouterr().err
     assert "no feasible pin-in-hole strategy" in err and "exceeds Δθ_ok = 0.100°" in err

@@ -153,7 +153,10 @@ def test_omega_pruning_keeps_the_best_three_by_theta5(ctx) -> None:
     by_gamma: dict[int, list[Grasp]] = {}
     for p in pickups:
         by_gamma.setdefault(round(p.strategy.grasp.gamma / DEG), []).append(p.strategy.grasp)
-    assert all(len(v) == 3 for v in by_gamma.values())
+    # Three ω kept per γ (L2122); a kept ω may still fall to the gross-motion sweep.
+    for gamma, kept in by_gamma.items():
+        swept = [r for r in rejected if " sweeps " in r.reason and f"γ={gamma}°" in r.candidate]
+        assert len(kept) + len(swept) == 3
     for gamma in by_gamma:
         ratings = sorted(
             p.strategy.rating for p in pickups if round(p.strategy.grasp.gamma / DEG) == gamma

@@ -8,9 +8,11 @@ The guarded move of the first attempt is (L2146–2148)::
 
 φ is chosen like ω: every 45°, an arm solution at the approach and destination points,
 "a single value of ϕ is picked to minimize the expected motion time" (L2155–2160) of the move
-departure → approach → destination. ``dtry = d_f + 1 in`` and ``standoff = 1 in`` (L2188–2190).
-The result is the "embryo" pin-in-hole strategy (L2201) whose cost is the pickup time plus
-the transport time: the candidate that best-first selection refines.
+departure → approach → destination, among the φ whose transport (departure → approach) is clear
+of the workcell (:mod:`synth.strategies.clearance`). ``dtry = d_f + 1 in`` and
+``standoff = 1 in`` (L2188–2190). The result is the "embryo" pin-in-hole strategy (L2201) whose
+cost is the pickup time plus the transport time: the candidate that best-first selection
+refines.
 
 Poses are those of the pin end that enters the hole (the tip, or the head when the pin is
 turned over): ``end = hole ∘ trans(rot(ẑ, φ), (0, 0, z))``; the hand is then at
@@ -97,7 +99,7 @@ def plan_approach(ctx: PlanContext, pickup: Pickup) -> Candidate | Rejection:
     d_f = ctx.insertion.d_f
     steps = round(2 * math.pi / opts.phi_step)
     table: list[tuple[float, float | None]] = []
-    best: tuple[float, float, Configuration, Configuration] | None = None
+    timed: list[tuple[float, float, Configuration, Configuration]] = []
     for k in range(steps):
         phi = k * opts.phi_step
         q_app = ctx.nearest(
@@ -114,14 +116,29 @@ def plan_approach(ctx: PlanContext, pickup: Pickup) -> Candidate | Rejection:
             continue
         t = ctx.motion([pickup.q_departure, q_app, q_dest])
         table.append((phi, t))
-        if best is None or t < best[0]:
-            best = (t, phi, q_app, q_dest)
-    if best is None:
+        timed.append((t, phi, q_app, q_dest))
+    if not timed:
         return Rejection(
             pickup.name,
             f"no φ in 0°…315° has arm solutions at the approach and destination points of "
             f"{ctx.hole_al}",
         )
+    # The quickest φ (L2160) whose transport is clear of the workcell.
+    carrying = ctx.gross.holding(grasp.pin_from_hand().inverse())
+    best: tuple[float, float, Configuration, Configuration] | None = None
+    first_reason: str | None = None
+    for entry in sorted(timed, key=lambda e: (e[0], e[1])):
+        reason = ctx.obstruction(
+            carrying,
+            [pickup.q_departure, entry[2]],
+            f"transport to the approach point of {ctx.hole_al} at φ={math.degrees(entry[1]):.0f}°",
+        )
+        if reason is None:
+            best = entry
+            break
+        first_reason = first_reason or reason
+    if best is None:
+        return Rejection(pickup.name, f"every φ is obstructed; the quickest: {first_reason}")
     transport, phi, q_app, q_dest = best
     q_surface = ctx.nearest(hand_at(ctx, grasp, hole_frame_offset(phi, (0.0, 0.0, 0.0))), q_dest)
     if q_surface is None:

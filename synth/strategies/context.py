@@ -19,14 +19,15 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from synth.errors.bounds import Interval, bound_linear
-from synth.errors.locate import resolve_contacts
+from synth.errors.locate import believed_graph
 from synth.errors.parameters import ParameterSpace
 from synth.exceptions import SpecError, UnreachableError
-from synth.models.arm import Arm, load_arm, motion_time, rank_solutions
+from synth.models.arm import Arm, CollisionScene, load_arm, motion_time, rank_solutions
 from synth.models.graph import AttributeGraph, pose_to_se3
 from synth.models.insertion import InsertionParameters, derive
 from synth.models.spec import HandSpec, HoleShape, PinShape, TaskSpec, Uncertainty
 from synth.models.world import Fact, World
+from synth.strategies.clearance import GrossMotionCheck
 from synth.strategies.options import PlanOptions
 
 Configuration = NDArray[np.float64]
@@ -38,7 +39,8 @@ class PlanCounters:
     """Work done by one plan: arm solutions, motion times and error bounds.
 
     ``bounds`` counts extrema of linear functionals over a parameter set; ``lp`` those of them
-    that needed HiGHS (coupled constraints, e.g. a tap measurement) instead of the closed form.
+    that needed HiGHS (coupled constraints, e.g. a tap measurement) instead of the closed form;
+    ``sweeps`` the swept collision checks of gross motions (:mod:`synth.strategies.clearance`).
     Local to one :func:`~synth.strategies.planner.plan_task` call.
     """
 
@@ -46,6 +48,7 @@ class PlanCounters:
     motion_time: int = 0
     bounds: int = 0
     lp: int = 0
+    sweeps: int = 0
 
     def as_dict(self) -> dict[str, int]:
         """The counts for ``PlanResult.counters``."""
@@ -54,6 +57,7 @@ class PlanCounters:
             "motion_time": self.motion_time,
             "bounds": self.bounds,
             "lp": self.lp,
+            "sweeps": self.sweeps,
         }
 
     def count_bounds(self, space: ParameterSpace, n: int = 1) -> None:
@@ -93,6 +97,7 @@ class PlanContext:
     target_end: PinEnd
     transform_pin_end: pin.SE3
     base_world: World
+    gross: GrossMotionCheck
     counters: PlanCounters = field(default_factory=PlanCounters)
 
     @property
@@ -104,6 +109,12 @@ class PlanContext:
     def hole_al(self) -> str:
         """AL name of the target hole (``BH1``)."""
         return self.graph.al_names[self.hole_frame]
+
+    @property
+    def park_al(self) -> str:
+        """AL name of the park frame (``BPARK``)."""
+        assert self.spec.manipulator is not None  # build_context requires it
+        return self.spec.manipulator.park.al_name
 
     @property
     def world_hole(self) -> pin.SE3:
@@ -144,6 +155,13 @@ class PlanContext:
         """Duration [s] of a move through ``waypoints`` by the configured rule (one call)."""
         self.counters.motion_time += 1
         return motion_time(self.arm.limits, waypoints, self.options.timing_rule).duration
+
+    def obstruction(
+        self, scene: CollisionScene, waypoints: list[Configuration], motion: str
+    ) -> str | None:
+        """Why a gross motion through ``waypoints`` is not clear, or None (one sweep, counted)."""
+        self.counters.sweeps += 1
+        return self.gross.obstruction(scene, waypoints, motion)
 
     def bound(self, objective: NDArray[np.float64], space: ParameterSpace) -> Interval:
         """Extrema of ``objective · v`` over ``space`` (closed form or LP), counted."""
@@ -197,10 +215,10 @@ def build_context(
 ) -> PlanContext:
     """Read the task into a :class:`PlanContext`; raise ``SpecError``/``UnreachableError``."""
     _require(spec)
-    spec = resolve_contacts(spec)  # objects located by contacts: derived pose and block
+    graph = believed_graph(spec)  # objects located by contacts: derived pose and block
+    spec = graph.spec
     assert spec.insertion is not None and spec.manipulator is not None
     opts = options or PlanOptions()
-    graph = AttributeGraph(spec)
     insertion = derive(graph, spec.insertion)
     assert insertion.start_hole is not None
     pin_shape = graph.nodes[insertion.pin].shape
@@ -253,5 +271,6 @@ def build_context(
         target_end=end,
         transform_pin_end=pin_end_frame(pin_shape, end),
         base_world=World.root(facts, label="task"),
+        gross=GrossMotionCheck.of(arm, graph, insertion.pin),
         counters=counters,
     )

@@ -299,6 +299,13 @@ def _pickup(
     q_departure = ctx.nearest(ctx.world_pin * _translation(lift) * transform_pin_hand, q_grasp)
     if q_departure is None:
         return Rejection(grasp_label(grasp), "no arm solution at the departure point")
+    blocked = ctx.obstruction(
+        ctx.gross.empty_hand(approach_opening),
+        [ctx.q_park, q_approach],
+        f"move from {ctx.park_al} to the grasp's approach point",
+    )
+    if blocked is not None:
+        return Rejection(grasp_label(grasp), blocked)
     move_time = ctx.motion([ctx.q_park, q_approach, q_grasp])
     lift_time = ctx.motion([q_grasp, q_departure])
     goodness = opts.open_time + move_time + opts.center_time + lift_time

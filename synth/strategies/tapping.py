@@ -247,6 +247,13 @@ def plan_tap(ctx: PlanContext, cand: Candidate, footprint: ErrorFootprint) -> Ta
     )
     if q_via is None or q_contact is None:
         return Rejection(cand.name, f"no arm solution at the tapping place {offset} m")
+    blocked = ctx.obstruction(
+        ctx.gross.holding(grasp.pin_from_hand().inverse()),
+        [cand.pickup.q_departure, q_via],
+        f"transport to the tap's via point above {ctx.graph.al_names[surface]}",
+    )
+    if blocked is not None:
+        return Rejection(cand.name, blocked)
     extra = (
         ctx.motion([cand.pickup.q_departure, q_via, q_contact])
         + ctx.motion([q_contact, cand.q_hole_approach, cand.q_destination])
