@@ -151,3 +151,33 @@ def test_polyline_and_timed_trajectory_checks(arm, path):
         arm.limits.velocity,
     )
     assert free.free and math.isclose(free.s, trajectory.duration)
+
+
+def test_margins_widen_the_clearance_of_named_bodies(arm, path):
+    # A body believed where it may not be (an uncertain obstacle) must be passed by its margin
+    # too. Ground truth: the closest approach to a plate 2 cm past the move's end, densely sampled.
+    q0, q1 = path
+    scene = CollisionScene(arm, [plate(0.67)])
+    on_plate = [i for i, p in enumerate(scene.pairs) if "plate" in p]
+    closest = min(
+        scene.distances(q0 + t * (q1 - q0))[on_plate].min() for t in np.linspace(0, 1, 2001)
+    )
+    clearance = SweepOptions().clearance
+    assert closest > clearance + 0.004
+    roomy = SweepOptions(margins={"plate": closest - clearance - 0.002})
+    assert swept_segment(scene, q0, q1, roomy).free
+    tight = SweepOptions(margins={"plate": closest - clearance + 0.001})
+    result = swept_segment(scene, q0, q1, tight)
+    assert not result.free and "plate" in result.pair
+    # The stop is where the pair first comes within clearance + margin, found in few steps:
+    # each step covers at least clearance/M (no Zeno approach to the margin).
+    assert result.distance <= clearance + tight.margins["plate"] + 1e-9
+    assert result.checks < 2_000
+    # Margins of both bodies add: split over the closest pair, the same stop.
+    body = next(name for name in result.pair if name != "plate")
+    half = tight.margins["plate"] / 2
+    split = swept_segment(scene, q0, q1, SweepOptions(margins={"plate": half, body: half}))
+    assert not split.free and split.s == pytest.approx(result.s, abs=1e-6)
+    assert tight.required([("plate", "palm")])[0] == pytest.approx(
+        clearance + tight.margins["plate"]
+    )

@@ -61,8 +61,8 @@ def test_the_sweep_rejects_the_pickup_whose_move_from_park_hits_the_box(old_base
     assert ctx.counters.sweeps >= len(pickups) + 1
     # Independent: sample the same straight joint segment densely with exact Coal distances,
     # at least 8 samples per mm of hand travel (finer than the 1 mm clearance).
-    same_gamma = next(p for p in pickups if round(p.strategy.grasp.gamma / DEG) == 100)
-    grasp = Grasp(math.pi, same_gamma.strategy.grasp.gamma, same_gamma.strategy.grasp.distance)
+    distance = pickups[0].strategy.grasp.distance  # the single grasp distance (L2595)
+    grasp = Grasp(math.pi, 100 * DEG, distance)
     found = ctx.best_rated(ctx.world_pin * grasp.pin_from_hand())
     assert found is not None
     approach = transform_pin_approach(grasp, ctx.options.grasp_approach_distance)
@@ -112,3 +112,39 @@ def test_every_planned_program_replays_in_the_nominal_world(path: Path) -> None:
     report = replay(program, path)
     assert report.nominal.outcome == "success", (result.strategy.name, report.nominal.message)
     assert report.nominal.violations == ()
+
+
+def test_box_margin_bounds_every_sampled_displacement_of_its_corners() -> None:
+    # BOX under ±0.3 in, ±0.2 in, ±5° (L2566): its margin is |t|max + θmax·r with r the radius
+    # of its bounding ball about its origin. Sampled: the corners' largest displacement over
+    # 20 000 uniform errors (the extreme points of a box are its corners).
+    spec = load_task(FIXTURES / "seed_4_8.yaml")
+    ctx = build_context(spec)
+    margin = ctx.gross.options.margins["BOX"]
+    t_max = math.hypot(0.3 * 0.0254, 0.2 * 0.0254)
+    radius = math.hypot(4.49, 3.80, 4.90 / 2) * 0.01 + 4.90 / 2 * 0.01  # |aabb centre| + ρ
+    assert margin == pytest.approx(t_max + math.radians(5) * radius, rel=1e-9)
+    rng = np.random.default_rng(0)
+    x, y = (rng.uniform(-b, b, 20_000) * 0.0254 for b in (0.3, 0.2))
+    rz = rng.uniform(-math.radians(5), math.radians(5), 20_000)
+    hx, hy, h = 0.0449, 0.0380, 0.049
+    corners = np.array([[sx * hx, sy * hy] for sx in (-1, 1) for sy in (-1, 1)])  # z unmoved
+    c, s = np.cos(rz)[:, None], np.sin(rz)[:, None]
+    moved_x = x[:, None] + c * corners[:, 0] - s * corners[:, 1]
+    moved_y = y[:, None] + s * corners[:, 0] + c * corners[:, 1]
+    worst = float(np.max(np.hypot(moved_x - corners[:, 0], moved_y - corners[:, 1])))
+    assert h > 0 and worst <= margin
+    # The ball's radius counts the height the z rotation cannot move: the margin exceeds the
+    # sampled worst by that, 5°·(8.82 − 5.88) cm ≈ 0.26 cm, and no more than 0.3 cm.
+    assert margin - worst < 0.003
+
+
+def test_with_margins_no_sampled_world_hits_the_box_on_the_gross_motions(old_base) -> None:
+    # Before the margins, the program planned here hit BOX with wrist_body on the move from
+    # BPARK in 56 of 300 sampled worlds (it passed 1 mm from the believed box). Now no trial may
+    # collide anywhere; with p = 56/300, 0 of 60 would have chance
+    # (1 − 0.187)^60 ≈ 4e-6.
+    program = emit_program(plan_task(old_base).strategy, believed_graph(old_base))
+    report = replay(program, old_base, trials=60, seed=1, workers=2, base_dir=FIXTURES)
+    hits = [v for run in report.trials for v in run.violations if v.kind == "collision"]
+    assert report.nominal.outcome == "success" and hits == []

@@ -173,8 +173,11 @@ def test_omega_pruning_keeps_the_best_three_by_theta5(ctx) -> None:
 
 
 def test_pickup_records_departure_and_worlds(ctx, pickups) -> None:
-    found, _ = pickups
-    assert len(found) > 9  # --try-harder keeps every reachable ω
+    found, rejected = pickups
+    # --try-harder keeps every reachable ω (more than the 3 per γ of L2122) unless its move from
+    # the park is obstructed (synth/strategies/clearance.py).
+    swept = [r for r in rejected if " sweeps " in r.reason]
+    assert len(found) + len(swept) > 9 and found
     for p in found:
         g = p.strategy
         # L2630: DEPARTURE POINT: PIN1=PIN1*TRANS(NILROTN,VECTOR(0,0,6.79)) = 2 in + d_i.

@@ -271,6 +271,6 @@ def build_context(
         target_end=end,
         transform_pin_end=pin_end_frame(pin_shape, end),
         base_world=World.root(facts, label="task"),
-        gross=GrossMotionCheck.of(arm, graph, insertion.pin),
+        gross=GrossMotionCheck.of(arm, graph, insertion.pin, manip.hand_error, q_park),
         counters=counters,
     )

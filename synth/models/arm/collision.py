@@ -307,13 +307,16 @@ class CollisionScene:
             (results[k].min_distance for k in range(len(self.pairs))), float, len(self.pairs)
         )
 
-    def distance_bounds(self, q: ArrayLike, exact_below: float = 0.0) -> NDArray[np.float64]:
-        """Lower bounds [m] on the pair distances at ``q``, exact where they are ≤ ``exact_below``.
+    def distance_bounds(
+        self, q: ArrayLike, exact_below: float | NDArray[np.float64] = 0.0
+    ) -> NDArray[np.float64]:
+        """Lower bounds [m] on the pair distances at ``q``, exact where ≤ ``exact_below``.
 
-        Meshes are replaced by their convex hulls, which contain them, so the hull distance can
-        only underestimate: d(hull A, hull B) ≤ d(A, B). Pairs whose bound is ≤ ``exact_below``
-        are recomputed on the meshes themselves. Swept checks use this: a fast bound is enough to
-        size a step, and only near-contacts need the exact, slower mesh distance.
+        ``exact_below`` is one threshold or one per pair. Meshes are replaced by their convex
+        hulls, which contain them, so the hull distance can only underestimate:
+        d(hull A, hull B) ≤ d(A, B). Pairs whose bound is ≤ ``exact_below`` are recomputed on the
+        meshes themselves. Swept checks use this: a fast bound is enough to size a step, and only
+        near-contacts need the exact, slower mesh distance.
         """
         qa = self._q(q)
         pin.computeDistances(self.model, self.data, self.bound_model, self.bound_data, qa)

@@ -23,7 +23,8 @@ S_a being the joints supporting a (an environment body has none). From a configu
 distance d > 0 the pair therefore cannot touch before s + d/M. The check steps to
 s + min over pairs of d/M (conservative advancement), so every step is bounded by a distance
 argument, never by a fixed count, and no obstacle, however thin, is stepped over. A pair closer
-than ``clearance`` counts as a collision, which also bounds the number of steps. Distances come
+than ``clearance`` (plus the bodies' ``margins``) counts as a collision, which also bounds the
+number of steps. Distances come
 from :meth:`CollisionScene.distance_bounds`: convex hulls of meshes give lower bounds (steps can
 only shrink), and a pair is re-measured on its meshes before it is declared too close. Coal's
 distances are accurate to its GJK tolerance (about 1 µm), far below the default clearance.
@@ -31,8 +32,8 @@ distances are accurate to its GJK tolerance (about 1 µm), far below the default
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -110,6 +111,20 @@ class SweepOptions:
     """[m] a pair closer than this counts as a collision (and bounds the number of steps)."""
     max_checks: int = 100_000
     """Safety stop on distance evaluations; reaching it reports the path as not free."""
+    margins: Mapping[str, float] = field(default_factory=dict)
+    """[m] extra clearance per body name: a pair (a, b) must stay ``clearance + margins[a] +
+    margins[b]`` apart. The planner puts here how far a body may be from where it is believed
+    (an object's pose error, the hand's positioning error), so a path clear of the believed
+    world is clear of every world the task allows."""
+
+    def pair_margins(self, pairs: Sequence[tuple[str, str]]) -> NDArray[np.float64]:
+        """margins[a] + margins[b] [m] for each pair (0 for bodies without a margin)."""
+        m = self.margins
+        return np.array([m.get(a, 0.0) + m.get(b, 0.0) for a, b in pairs], dtype=float)
+
+    def required(self, pairs: Sequence[tuple[str, str]]) -> NDArray[np.float64]:
+        """The distance [m] each pair must keep: the clearance plus both bodies' margins."""
+        return self.clearance + self.pair_margins(pairs)
 
 
 @dataclass(frozen=True)
@@ -139,22 +154,26 @@ def _advance(
 ) -> SweepResult:
     """Conservative advancement over s ∈ [0, end]: q = position(s), |dq_j/ds| ≤ rates_j."""
     bounds = scene.pair_bounds @ rates  # M per pair [m per unit s]
+    margins = options.pair_margins(scene.pairs)
     s, checks = 0.0, 0
     while True:
         q = position(s)
         if not scene.pairs:
             return SweepResult(True, end, q, None, float("inf"), checks)
-        d = scene.distance_bounds(q, exact_below=options.clearance)
+        d = scene.distance_bounds(q, exact_below=options.clearance + margins)
         checks += 1
-        k = int(np.argmin(d))
-        if d[k] <= options.clearance:
+        # The margins play the bodies' own surfaces: a step of gap/M cannot bring a pair inside
+        # its margins, and a gap ≤ clearance stops the check (so every step is ≥ clearance/M).
+        gap = d - margins
+        k = int(np.argmin(gap))
+        if gap[k] <= options.clearance:
             return SweepResult(False, s, q, scene.pairs[k], float(d[k]), checks)
         if s >= end:
             return SweepResult(True, end, q, scene.pairs[k], float(d[k]), checks)
         if checks >= options.max_checks:
             return SweepResult(False, s, q, scene.pairs[k], float(d[k]), checks)
         moving = bounds > 0
-        step = float(np.min(d[moving] / bounds[moving])) if np.any(moving) else end - s
+        step = float(np.min(gap[moving] / bounds[moving])) if np.any(moving) else end - s
         s = min(end, s + step)
 
 
