@@ -7,7 +7,11 @@
 the box's own position error (±0.76 cm in x, ±0.51 cm in y, ±5° ≈ ±0.44 cm at BH1), and the
 search's first ring (0.572 cm, turned by FPW = 60°) starts towards that corner; a search point
 off the box lets the pin and the fingers pass beside it, nothing is felt, and the program gives
-up. The issue asks for ≥ 99%; the seed's geometry does not allow it with a box edge that close.
+up. The issue asks for ≥ 99%; with *uniform* errors the seed's geometry does not allow it with a
+box edge that close. Read as the seed's chapter IX reads a tolerance (normal, σ = tolerance/3,
+truncated; L7240–7242; ``--distribution normal``), the same listing succeeds in 1999 of 2000
+trials: beside-the-box aborts need a box error near its bound. Both are asserted below; which
+distribution a real workcell has is the production engineer's call (L7240).
 
 The default test replays 300 trials and asserts k ≥ 279 successes (93%). Binomial argument:
 for a true rate p = 0.960 (the lower end of the interval above), P(K ≤ 278 | n = 300) = 0.0051;
@@ -33,6 +37,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from synth.models.graph import AttributeGraph
+from synth.models.loader import load_task
 from synth.replay import (
     HandErrors,
     build_context,
@@ -127,6 +133,44 @@ def test_search_listing_monte_carlo_2000(request: pytest.FixtureRequest, search_
     assert mc.successes >= 1880, mc.outcomes
     assert set(mc.outcomes) <= {"success", "abort"}
     check_search_failures(search_text, list(report.trials), seed=0)
+
+
+def test_search_listing_monte_carlo_2000_normal(search_text: str) -> None:
+    # The issue's ≥ 99% of 2 000, with the box and hand errors read as the seed's chapter IX
+    # reads a tolerance: normal, σ = tolerance/3, truncated at it (L7240–7242). Measured
+    # 1999/2000 (seed 0): the beside-the-box aborts need a box error near its bound, which a
+    # 3σ tolerance makes rare. Binomial: for a true rate of 0.995, P(K < 1980) = 2e-4.
+    report = replay(
+        search_text, SEED, trials=2000, seed=0, workers=os.cpu_count() or 2, distribution="normal"
+    )
+    mc = report.monte_carlo
+    assert report.ok and mc.trials == 2000
+    assert mc.successes >= 1980, mc.outcomes
+    assert set(mc.outcomes) <= {"success", "abort"}
+    lo, _ = wilson_interval(mc.successes, mc.trials)
+    assert lo > 0.99 - 0.005
+
+
+def test_a_distribution_override_samples_every_block_from_it() -> None:
+    # σ of the box's x error: uniform on ±0.3 in has 0.3 in/√3; a normal with σ = 0.1 in
+    # truncated at 3σ has 0.1 in·√(1 − 6φ(3)/(2Φ(3) − 1)) = 0.0986 in.
+    from scipy.stats import truncnorm
+
+    spec = load_task(SEED)
+    for name, expected in (
+        ("uniform", 0.3 * INCH / math.sqrt(3)),
+        ("normal", 0.1 * INCH * float(truncnorm(-3, 3).std())),
+    ):
+        graph = AttributeGraph(spec.with_distribution(name))
+        rng = np.random.default_rng(5)
+        xs = [sample_world(graph, rng).link_errors["box"].translation[0] for _ in range(4000)]
+        assert float(np.std(xs)) == pytest.approx(expected, rel=0.05)
+        manipulator = graph.spec.manipulator
+        assert manipulator is not None and manipulator.hand_error is not None
+        assert manipulator.hand_error.distribution == name
+    assert spec.with_distribution("normal").frames[0].uncertainty.bounds() == (
+        spec.frames[0].uncertainty.bounds()
+    )
 
 
 def first_cut_model(samples: int = 200_000) -> float:

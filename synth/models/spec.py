@@ -225,6 +225,11 @@ def _coefficient_si(param: str, coefficient: Any, kind: Literal["length", "angle
     )
 
 
+Distribution = Literal["uniform", "normal"]
+"""How a bounded error is sampled in Monte Carlo (seed ch. IX, L7240–7242: uniform, or normal
+with σ = tolerance/3 truncated at the tolerance); the choice is the production engineer's."""
+
+
 class Uncertainty(_Model):
     """Bounded error parameters of one link, in the link's frame (seed Eqn 3.5.1, L2205).
 
@@ -240,7 +245,7 @@ class Uncertainty(_Model):
     ry: AngleBound | None = None
     rz: AngleBound | None = None
     constraints: tuple[LinearConstraint, ...] = ()
-    distribution: Literal["uniform", "normal"] = "uniform"
+    distribution: Distribution = "uniform"
 
     def bounds(self) -> dict[str, Bound]:
         """The bounded parameters in canonical order (x, y, z, rx, ry, rz)."""
@@ -523,3 +528,26 @@ class TaskSpec(_Model):
         if not v:
             raise ValueError("a task needs at least one frame")
         return v
+
+    def with_distribution(self, distribution: Distribution) -> TaskSpec:
+        """The task with every error block (frames and hand) sampled from ``distribution``.
+
+        For sensitivity studies of Monte Carlo rates (seed L7240: "the shape of the distribution
+        function depends on the manufacturing process"); the bounds are unchanged, so the
+        planner's worst-case figures are too.
+        """
+
+        def swap(block: Uncertainty | None) -> Uncertainty | None:
+            return (
+                None if block is None else block.model_copy(update={"distribution": distribution})
+            )
+
+        frames = tuple(
+            f.model_copy(update={"uncertainty": swap(f.uncertainty)}) for f in self.frames
+        )
+        manipulator = self.manipulator
+        if manipulator is not None:
+            manipulator = manipulator.model_copy(
+                update={"hand_error": swap(manipulator.hand_error)}
+            )
+        return self.model_copy(update={"frames": frames, "manipulator": manipulator})

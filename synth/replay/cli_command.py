@@ -79,6 +79,13 @@ def add_replay_parser(sub: Any) -> None:
         default=None,
         help="processes running the trials (default: one per CPU core)",
     )
+    p.add_argument(
+        "--distribution",
+        choices=("uniform", "normal"),
+        default=None,
+        help="sample every error block from this distribution instead of the task's own "
+        "(normal: σ = tolerance/3, truncated; seed ch. IX)",
+    )
     p.add_argument("--json", action="store_true", help="print the report as JSON (SI units)")
     p.add_argument(
         "--preamble",
@@ -136,6 +143,7 @@ def run_replay(args: argparse.Namespace) -> int:
             workers=min(workers, max(args.trials, 1)),
             filename=args.program,
             progress=bar,
+            distribution=args.distribution,
         )
     finally:
         if bar is not None:

@@ -46,7 +46,7 @@ from synth.exceptions import ALRuntimeError, SpecError
 from synth.models.arm import Arm, load_arm
 from synth.models.graph import AttributeGraph, pose_to_se3
 from synth.models.loader import load_task
-from synth.models.spec import TaskSpec
+from synth.models.spec import Distribution, TaskSpec
 from synth.models.workcell import WorkcellModel
 from synth.replay.machine import ReplayMachine, ReplayOptions, ViolationStop
 from synth.replay.reach import describe_pose
@@ -96,11 +96,13 @@ def build_context(
     filename: str = "<al>",
     base_dir: str | Path | None = None,
     options: ReplayOptions | None = None,
+    distribution: Distribution | None = None,
 ) -> ReplayContext:
     """Parse the program and build the task's model (raises ALSyntaxError, SpecError, ...).
 
     ``task`` is a spec or a task file; URDF paths resolve against ``base_dir`` (default: the
-    task file's directory, or the working directory for a spec).
+    task file's directory, or the working directory for a spec). ``distribution`` replaces
+    every error block's own (:meth:`~synth.models.spec.TaskSpec.with_distribution`).
     """
     program = parse_program(program_text, filename=filename)
     if isinstance(task, TaskSpec):
@@ -121,6 +123,8 @@ def build_context(
             f"({describe_pose(park)}), where the replay starts it",
         )
     graph = believed_graph(spec)  # a fixture-held box: where its contacts put it
+    if distribution is not None:
+        graph = AttributeGraph(graph.spec.with_distribution(distribution))
     return ReplayContext(
         program=program,
         spec=graph.spec,
@@ -289,11 +293,13 @@ def replay(
     base_dir: str | Path | None = None,
     options: ReplayOptions | None = None,
     progress: Progress | None = None,
+    distribution: Distribution | None = None,
 ) -> ReplayReport:
     """Replay ``program_text`` on ``task``: the nominal run and ``trials`` Monte Carlo trials.
 
     ``seed`` seeds the trials (:func:`trial_seed`); ``workers`` processes run them (1: in this
-    process). Raises ALSyntaxError for a program that does not parse and SpecError (or another
+    process); ``distribution`` overrides the task's sampling distributions. Raises
+    ALSyntaxError for a program that does not parse and SpecError (or another
     :class:`~synth.exceptions.SynthError`) for an unusable task.
     """
     if trials < 0:
@@ -301,7 +307,12 @@ def replay(
     if isinstance(task, str | Path) and base_dir is None:
         base_dir = Path(task).resolve().parent
     context = build_context(
-        program_text, task, filename=filename, base_dir=base_dir, options=options
+        program_text,
+        task,
+        filename=filename,
+        base_dir=base_dir,
+        options=options,
+        distribution=distribution,
     )
     nominal = run_nominal(context)
     runs: list[RunReport]
