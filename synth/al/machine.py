@@ -56,6 +56,7 @@ __all__ = [
     "MachineCommand",
     "MonitorSpec",
     "MotionConstraint",
+    "MotionGate",
     "MotionResult",
     "OpeningMonitor",
     "Relation",
@@ -354,7 +355,27 @@ class _Motion:
 _ZERO3 = np.zeros(3)
 
 
-class IdealMachine:
+class MotionGate:
+    """What every machine checks before it starts a motion (AL's one-motion-at-a-time rule).
+
+    A motion paused by a monitor (``_motion`` not None) must be stopped or resumed before the
+    next command; a ``MOVE`` needs at least one target. Shared by :class:`IdealMachine` and
+    :class:`synth.replay.machine.ReplayMachine`.
+    """
+
+    _motion: object | None = None
+
+    def _check_idle(self) -> None:
+        if self._motion is not None:
+            raise RuntimeError("a motion is paused; call stop() or resume() first")
+
+    def _check_move(self, targets: Sequence[pin.SE3]) -> None:
+        self._check_idle()
+        if not targets:
+            raise ValueError("a motion needs at least one target")
+
+
+class IdealMachine(MotionGate):
     """A machine whose world is exactly the program's beliefs.
 
     Nothing is ever touched: sensed forces and torques are zero, every motion reaches its last
@@ -426,10 +447,6 @@ class IdealMachine:
 
     # ---- motions
 
-    def _check_idle(self) -> None:
-        if self._motion is not None:
-            raise RuntimeError("a motion is paused; call stop() or resume() first")
-
     def _segment_times(self, command: MachineCommand) -> list[float]:
         n = len(command.targets)
         times = [self.segment_time] * n
@@ -457,9 +474,7 @@ class IdealMachine:
         line: int,
     ) -> MotionResult:
         """Move through ``targets``; see the class docstring."""
-        self._check_idle()
-        if not targets:
-            raise ValueError("a motion needs at least one target")
+        self._check_move(targets)
         command = MachineCommand(
             "move",
             tuple(pin.SE3(t) for t in targets),

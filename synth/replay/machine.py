@@ -81,6 +81,7 @@ from synth.al.machine import (
     ForceMonitor,
     MonitorSpec,
     MotionConstraint,
+    MotionGate,
     MotionResult,
     OpeningMonitor,
     TorqueMonitor,
@@ -189,7 +190,7 @@ class PinState:
 # The machine
 
 
-class ReplayMachine:
+class ReplayMachine(MotionGate):
     """The Machine protocol on ``arm`` in a true ``workcell`` (see the module docstring).
 
     ``hand_errors`` is the stream of hand positioning errors (:class:`HandErrors.none` for the
@@ -388,10 +389,6 @@ class ReplayMachine:
 
     # ---- motions
 
-    def _check_idle(self) -> None:
-        if self._motion is not None:
-            raise RuntimeError("a motion is paused; call stop() or resume() first")
-
     def move(
         self,
         targets: Sequence[pin.SE3],
@@ -400,9 +397,7 @@ class ReplayMachine:
         line: int,
     ) -> MotionResult:
         """Move the hand through ``targets`` (see the module docstring)."""
-        self._check_idle()
-        if not targets:
-            raise ValueError("a motion needs at least one target")
+        self._check_move(targets)
         configurations = [self._q]
         for k, target in enumerate(targets):
             try:
