@@ -39,6 +39,7 @@ def main() -> None:
     header = (
         f"{'fixture':28}{'cand':>5}{'bf [s]':>8}{'ex [s]':>8}{'ex/bf':>7}{'same':>6}"
         f"{'refined':>9}{'IK bf/ex':>11}{'motion bf/ex':>14}{'bounds bf/ex':>14}{'LP bf/ex':>10}"
+        f"{'sweeps bf/ex':>14}"
     )
     print(header)
     print("-" * len(header))
@@ -55,13 +56,14 @@ def main() -> None:
             ex_time, ex = timed(spec, args.repeat, try_harder=harder, exhaustive=True)
             same = bf.strategy.name == ex.strategy.name
             pairs = [
-                f"{bf.counters[k]}/{ex.counters[k]}" for k in ("ik", "motion_time", "bounds", "lp")
+                f"{bf.counters[k]}/{ex.counters[k]}"
+                for k in ("ik", "motion_time", "bounds", "lp", "sweeps")
             ]
             print(
                 f"{label:28}{len(ex.candidates):5d}{bf_time:8.3f}{ex_time:8.3f}"
                 f"{ex_time / bf_time:7.2f}{'yes' if same else 'NO':>6}"
                 f"{f'{bf.refined}/{ex.refined}':>9}"
-                f"{pairs[0]:>11}{pairs[1]:>14}{pairs[2]:>14}{pairs[3]:>10}"
+                f"{pairs[0]:>11}{pairs[1]:>14}{pairs[2]:>14}{pairs[3]:>10}{pairs[4]:>14}"
             )
             assert same, f"{label}: best-first {bf.strategy.name} ≠ exhaustive {ex.strategy.name}"
 
