@@ -148,3 +148,36 @@ def test_with_margins_no_sampled_world_hits_the_box_on_the_gross_motions(old_bas
     report = replay(program, old_base, trials=60, seed=1, workers=2, base_dir=FIXTURES)
     hits = [v for run in report.trials for v in run.violations if v.kind == "collision"]
     assert report.nominal.outcome == "success" and hits == []
+
+
+@pytest.mark.parametrize("task", ["seed_4_8", "seed_4_8_tap", "seed_4_8_fixture"])
+def test_swept_configurations_are_the_ones_the_replay_moves_through(task: str) -> None:
+    # The sweep is only as good as its path: the planner's configurations (the best-rated grasp,
+    # then nearest by motion time) must be those the replay reaches, solving each MOVE target
+    # nearest its current configuration from the park on (synth/replay/reach.py).
+    from synth.replay.reach import solve_near
+    from synth.strategies.approach import hand_at, hole_frame_offset, plan_approach
+    from synth.strategies.records import Rejection
+
+    ctx = build_context(load_task(FIXTURES / f"{task}.yaml"))
+    pickups, _ = generate_pickups(ctx, try_harder=True)
+    assert pickups
+    for p in pickups:
+        grasp = p.strategy.grasp
+        approach = ctx.world_pin * transform_pin_approach(
+            grasp, ctx.options.grasp_approach_distance
+        )
+        q = solve_near(ctx.arm, approach, ctx.q_park)
+        np.testing.assert_allclose(q, p.q_approach, atol=1e-9)
+        q = solve_near(ctx.arm, ctx.world_pin * grasp.pin_from_hand(), q)
+        np.testing.assert_allclose(q, p.q_grasp, atol=1e-9)
+        departure = ctx.world_pin * p.strategy.departure_point.xf * grasp.pin_from_hand()
+        q = solve_near(ctx.arm, departure, q)
+        np.testing.assert_allclose(q, p.q_departure, atol=1e-9)
+        made = plan_approach(ctx, p)
+        if isinstance(made, Rejection):
+            continue
+        above = hand_at(
+            ctx, grasp, hole_frame_offset(made.strategy.phi, (0, 0, ctx.options.standoff))
+        )
+        np.testing.assert_allclose(solve_near(ctx.arm, above, q), made.q_hole_approach, atol=1e-9)

@@ -7,7 +7,9 @@ object that the straight line between the two sites misses: with the seed_4_8 ar
 (20, 80) cm, the planner's move from BPARK to the rack swept finger_left through BOX, and the
 replay refused the program (issue 5). So every candidate's gross motions are swept here, with
 Coal and conservative advancement (:func:`synth.models.arm.swept_path`), along the straight
-joint-space segments between the configurations the planner timed:
+joint-space segments between the configurations the planner timed (on every fixture these are
+the ones the replay reaches by solving each target nearest its current configuration from the
+park on; ``tests/test_plan_clearance.py`` checks it):
 
 1. ``park → grasp approach``: empty hand, fingers at the approach opening (L2139); every solid
    of the workcell (:mod:`synth.models.workcell`: table, boxes, racks, fixtures) and the pin
