@@ -167,8 +167,11 @@ def test_omega_pruning_keeps_the_best_three_by_theta5(ctx) -> None:
         for r in pruned:  # every pruned ω rates no better than the kept ones
             rating = float(r.reason.split("= ")[1].split("°")[0]) * DEG
             assert rating >= ratings[-1] - 0.05 * DEG
-    # γ = 180°: θ5 does not depend on ω, so the ratings tie and the first three ω survive.
-    assert [round(g.omega / DEG) for g in by_gamma[180]] == [0, 45, 90]
+    # γ = 180°: |θ5| does not depend on ω, so the ratings tie and the first three ω survive,
+    # except ω = 0 with the arm at (20, 70) cm: there the wrist with θ5 = +76.4° needs
+    # θ6 = −165.9°, past the −165° stop, so only the flipped wrist (θ5 = −76.4°, rated 121.4°)
+    # is attainable and ω = 0 is pruned (at the old base, (20, 80) cm, θ6 = −161.9°: all tied).
+    assert [round(g.omega / DEG) for g in by_gamma[180]] == [45, 90, 135]
     assert all("--try-harder" in r.reason for r in rejected if r.reason.startswith("pruned"))
 
 

@@ -22,6 +22,7 @@ import pytest
 from synth.al.parser import parse_program
 from synth.cli import main
 from synth.exceptions import ALSyntaxError
+from synth.models.graph import pose_to_se3
 from synth.models.loader import load_task
 from synth.models.spec import Pose, TaskSpec
 from synth.replay import (
@@ -61,10 +62,11 @@ def with_base(spec: TaskSpec, x_cm: float, y_cm: float, yaw_deg: float) -> TaskS
     return spec.model_copy(update={"manipulator": manipulator.model_copy(update={"arm": arm})})
 
 
-# The tap listing's grasp approach (L2817, W = 98°, grasp angle 135°) needs the boom 0.3 cm
-# shorter than its 6 in stop with the arm where the fixture stands it, (20, 80) cm; 5 cm
-# further from the rack every pose of both listings is attainable (see the test below).
-TAP_BASE = (20.0, 75.0, 225.0)
+# Where the seed_4_8 fixtures stand the arm (fixtures/arms/stanford.yaml says why): (20, 70) cm,
+# turned 225° about z. The base used to be (20, 80) cm, where the tap listing's grasp approach
+# (L2817) needs the boom shorter than its 6 in stop (see the tests below).
+FIXTURE_BASE = (20.0, 70.0, 225.0)
+OLD_BASE = (20.0, 80.0, 225.0)
 
 
 # --------------------------------------------------------------------------------------------
@@ -98,9 +100,8 @@ def test_search_listing_seats_the_pin_in_the_nominal_world() -> None:
 
 
 def test_tap_listing_seats_the_pin_in_the_nominal_world() -> None:
-    spec = with_base(load_task(TAP), *TAP_BASE)
     path = DATA / "seed_4_8_tap.al"
-    context = build_context(path.read_text(encoding="utf-8"), spec, filename=str(path))
+    context = build_context(path.read_text(encoding="utf-8"), TAP, filename=str(path))
     machine = machine_for(context, nominal_world(context.graph), HandErrors.none())
     report, interpreter = run_machine(context, machine)
     assert report.outcome == "success", report.message
@@ -114,32 +115,51 @@ def test_tap_listing_seats_the_pin_in_the_nominal_world() -> None:
     assert abs(distance_off + corr) < 1e-9
 
 
-def test_tap_listing_on_the_fixture_base_reaches_past_the_boom_stop() -> None:
-    # The replay names the pose the fixture's arm cannot reach: the grasp approach via point.
-    # By hand (seed eqs. 14–21): wrist centre w = p − S6·a in the base frame; ρ² = wx² + wy² −
-    # S2²; boom extension S3 = √(ρ² + (wz − S1)²) must be ≥ 6 in.
-    spec = load_task(TAP)
-    text = (DATA / "seed_4_8_tap.al").read_text(encoding="utf-8")
-    report = replay(text, spec)
+def tap_via_point_boom_extension(x_cm: float, y_cm: float, yaw_deg: float) -> float:
+    """S3 [m] the tap listing's grasp approach via point (L2817) needs with the base at (x, y).
+
+    By hand (seed eqs. 14–21): wrist centre w = p − S6·a in the base frame; ρ² = wx² + wy² −
+    S2²; boom extension S3 = √(ρ² + (wz − S1)²).
+    """
     pin1 = pin.SE3(axis_angle((0, 0, 1), math.pi / 2), np.array([24.1, 117.0, 0.537]) * CM)
     # TRANS(rot, vec): rotation rot, translation vec (not rotated), L2817
     rotation = axis_angle((0.679, 0.679, 0.281), math.radians(149))
     via = pin1 * pin.SE3(rotation, np.array([-3.59, 0.0, 7.13]) * CM)
-    base = pin.SE3(axis_angle((0, 0, 1), math.radians(225)), np.array([0.20, 0.80, 0.0]))
+    base = pin.SE3(axis_angle((0, 0, 1), math.radians(yaw_deg)), np.array([x_cm, y_cm, 0]) * CM)
     local = base.inverse() * via
     s1, s2, s6 = 0.412, 0.154, 0.263  # Paul's Stanford arm (fixtures/arms/stanford.yaml)
     w = local.translation - s6 * local.rotation[:, 2]
-    s3 = math.sqrt(w[0] ** 2 + w[1] ** 2 - s2**2 + (w[2] - s1) ** 2)
-    line = next(
-        i for i, t in enumerate(text.splitlines(), 1) if t.startswith("MOVE BMANIP TO PIN1")
-    )
-    if s3 < 6 * INCH:
-        assert report.nominal.outcome == "violation"
-        (violation,) = report.nominal.violations
-        assert (violation.kind, violation.line) == ("unreachable", line)
-        assert "via point 1" in violation.detail
-    else:
-        assert report.nominal.outcome == "success"
+    return math.sqrt(w[0] ** 2 + w[1] ** 2 - s2**2 + (w[2] - s1) ** 2)
+
+
+def test_tap_listing_via_point_is_within_the_boom_travel_at_the_fixture_base() -> None:
+    # The fixture stands the arm where this test's hand computation puts it
+    manipulator = load_task(TAP).manipulator
+    assert manipulator is not None and manipulator.arm.base is not None
+    x, y, yaw = FIXTURE_BASE
+    expected = pin.SE3(axis_angle((0, 0, 1), math.radians(yaw)), np.array([x, y, 0.0]) * CM)
+    base = manipulator.arm.base
+    assert np.allclose(pose_to_se3(base).homogeneous, expected.homogeneous, atol=1e-12)
+    # 24.93 cm: 9.7 cm clear of the 6 in (15.24 cm) stop, far below the 35 in one
+    s3 = tap_via_point_boom_extension(*FIXTURE_BASE)
+    assert 6 * INCH + 9 * CM < s3 < 35 * INCH
+    text = (DATA / "seed_4_8_tap.al").read_text(encoding="utf-8")
+    report = replay(text, TAP)
+    assert report.nominal.outcome == "success", report.nominal.message
+
+
+def test_tap_listing_at_the_old_base_reaches_past_the_boom_stop() -> None:
+    # At (20, 80) cm the via point needs S3 = 14.94 cm < 6 in: the replay names that pose as
+    # unreachable at its line, the grasp approach.
+    s3 = tap_via_point_boom_extension(*OLD_BASE)
+    assert math.isclose(s3, 14.94 * CM, abs_tol=0.005 * CM) and s3 < 6 * INCH
+    text = (DATA / "seed_4_8_tap.al").read_text(encoding="utf-8")
+    report = replay(text, with_base(load_task(TAP), *OLD_BASE))
+    assert report.nominal.outcome == "violation"
+    (violation,) = report.nominal.violations
+    line = line_of(text, "MOVE BMANIP TO PIN1*TRANS(ROTN(VECTOR(.679,.679,.281),149*DEG)")
+    assert line == 20 and (violation.kind, violation.line) == ("unreachable", line)
+    assert "via point 1" in violation.detail
 
 
 def test_first_cut_program_seats_the_pin_in_the_nominal_world() -> None:
