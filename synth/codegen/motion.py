@@ -52,12 +52,14 @@ class Guard:
     """Stop-on-force qualifiers of a guarded move (seed L2735–2736).
 
     ``ON FORCE(ORIENT(frame)*ZHAT) > force DO STOP`` and ``ON ARRIVAL DO ABORT(message)``: the
-    move aims past the expected contact, so arriving means the contact was missed.
+    move aims past the expected contact, so arriving means the contact was missed. Without a
+    ``message`` there is no arrival clause: the program itself handles a move that felt nothing
+    (the search's ``retract``, :data:`synth.strategies.records.OffSurface`).
     """
 
     frame: Fragment
     force: Fragment
-    message: Fragment
+    message: Fragment | None
 
 
 @dataclass(frozen=True)

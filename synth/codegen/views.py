@@ -29,7 +29,7 @@ rounded), so that neither the three-digit rounding of the limit nor the accumula
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from synth.al.binding import bind_world
 from synth.al.names import RESERVED
@@ -144,7 +144,11 @@ class SearchView:
     Rings of radius ``ring_step, 2·ring_step, …`` while ``radius ≤ ring_limit``; on each, angles
     ``0, Δw, 2Δw, …`` below ``full_circle`` with ``Δw = (ring_step/R)*RAD``; a point (X, Y) is
     tried when ``|X| ≤ half_x`` and ``|Y| ≤ half_y``, at
-    ``SETPNT = hole*TRANS(NILROTN, ROT(ZHAT, zeta)*VECTOR(X, Y, 0))``.
+    ``SETPNT = hole*TRANS(NILROTN, ROT(ZHAT, zeta)*VECTOR(X, Y, 0))``. With a ``retreat``
+    (the record's ``off_surface = "retract"``) the point's guarded move has no arrival abort;
+    a point where the pin went deeper than the seated depth by more than the threshold
+    (``DISTANCE_OFF < below``: nothing was felt) is backed out of along the hole axis to its
+    approach point, and the loop goes on.
     """
 
     missed: Fragment
@@ -172,6 +176,9 @@ class SearchView:
     pin: Fragment
     correction: Fragment | None
     message: Fragment
+    retreat: MoveView | None
+    below: Fragment | None
+    beside: Fragment | None
 
 
 @dataclass(frozen=True)
@@ -442,6 +449,13 @@ def _search(
             )
         return _waypoint(names, d, field, base=setpnt)
 
+    retract = None
+    if search.off_surface == "retract":
+        (retract,) = motion_sequence([shifted(s.approach, "approach")], field="approach")
+    elif search.off_surface != "abort":
+        raise CodegenError("search.off_surface", f"abort or retract, not {search.off_surface!r}")
+    threshold_m = _positive(s.success_threshold, "success_threshold")
+
     return SearchView(
         missed=L.comment(missed),
         distance_off=distance_off,
@@ -465,11 +479,14 @@ def _search(
         zero_length=L.length(0.0),
         moves=motion_sequence(
             [shifted(s.approach, "approach"), shifted(s.target, "target")],
-            guard=guard,
+            guard=guard if retract is None else replace(guard, message=None),
             field="target",
         ),
         seated=shifted(s.destination, "destination").location,
         pin=pin_,
         correction=correction,
         message=L.string(missed),
+        retreat=retract,
+        below=None if retract is None else L.length(-threshold_m, field="success_threshold"),
+        beside=None if retract is None else L.comment(f"NOTHING FELT: {pin_.text} WENT BESIDE"),
     )

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from synth.models.arm import JIFFY
+from synth.strategies.records import OffSurface
 
 INCH = 0.0254
 """[m] one inch."""
@@ -68,6 +69,9 @@ class PlanOptions:
     """[m] the tap starts this far above the nominal surface and aims this far below (L2852)."""
     search_step_fraction: float = 0.75
     """Search ring spacing = this · Δr_ok (L2743: ``R = .572; ! 0.75*DROK``)."""
+    search_off_surface: OffSurface = "retract"
+    """A search point where nothing is felt: ``retract`` and try the next point, or ``abort``
+    as the seed's listing does (L2762); see :data:`synth.strategies.records.OffSurface`."""
     open_time: float = 50 * JIFFY
     """[s] OPEN BHAND (seed App. 2, L3854: 50 jiffies)."""
     center_time: float = 50 * JIFFY

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import pinocchio as pin
@@ -179,6 +179,14 @@ class Tap:
         }
 
 
+OffSurface = Literal["abort", "retract"]
+"""A search move that reaches its target without a force has passed beside the surface: the
+footprint (object pose errors) can reach past the edge of the face the hole is in (seed_4_8: BH1
+is 0.60 cm from two edges of a box that may be 1.4 cm off). ``abort`` is the seed's listing
+(L2762–2763, "EXPECTED A FORCE HERE"); ``retract`` backs the pin out along the hole axis to the
+point's approach and tries the next point, since the hole may still lie further on."""
+
+
 @dataclass(frozen=True)
 class Search:
     """A spiral search over the error footprint (seed §4.8, L2740–2790).
@@ -196,6 +204,8 @@ class Search:
     rings: int
     expected_points: int
     time: float
+    off_surface: OffSurface = "retract"
+    """What a search move that feels nothing does (see :data:`OffSurface`)."""
 
     @property
     def max_radius(self) -> float:
@@ -211,6 +221,7 @@ class Search:
             "step": self.step,
             "rings": self.rings,
             "expected_points": self.expected_points,
+            "off_surface": self.off_surface,
             "time": self.time,
         }
 

@@ -136,4 +136,5 @@ def plan_search(
         rings=rings,
         expected_points=count,
         time=count * try_time,
+        off_surface=options.search_off_surface,
     )

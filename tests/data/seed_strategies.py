@@ -119,6 +119,7 @@ def seed_4_8() -> PinInHoleStrategy:
             rings=3,
             expected_points=7,  # ring points within 0.79 × 0.575 cm (L2470); not printed
             time=0.688,
+            off_surface="abort",  # L2762: the listing aborts where nothing is felt
         ),
         name="130523",
     )
