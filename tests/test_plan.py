@@ -104,7 +104,12 @@ def test_best_first_and_exhaustive_agree(seed, tap) -> None:
                 assert c.goodness >= best - 1e-12
             else:
                 assert c.ttime + best_first.minimum_refinement_cost >= best
-    assert tap[0].refined < tap[1].refined  # the cutoff saves work on the variation
+    # The cutoff saves work where a cheap candidate's refinement beats the gross times of the
+    # rest: on the fixture-located box (1 of 5 refined, benchmarks/plan.py); the seed tasks'
+    # candidates now all pass within the cutoff, so there it saves nothing.
+    located = load_task(FIXTURES / "seed_4_8_fixture.yaml")
+    bf, ex = plan_task(located), plan_task(located, exhaustive=True)
+    assert bf.strategy.name == ex.strategy.name and bf.refined < ex.refined
 
 
 def test_decisions_do_not_depend_on_the_timing_rule() -> None:

@@ -27,8 +27,13 @@ from synth.models.spec import Pose, TaskSpec
 from synth.replay import replay
 from synth.strategies import plan_task
 from synth.strategies.context import build_context
-from synth.strategies.grasp import generate_pickups, hand_openings, transform_pin_approach
-from synth.strategies.records import Grasp
+from synth.strategies.grasp import (
+    generate_pickups,
+    hand_openings,
+    reached_grasp,
+    transform_pin_approach,
+)
+from synth.strategies.records import Grasp, Rejection
 
 FIXTURES = Path(__file__).parent.parent / "fixtures" / "tasks"
 OBSTRUCTED = "ω=180° γ=100° d=3.54 cm"
@@ -63,11 +68,9 @@ def test_the_sweep_rejects_the_pickup_whose_move_from_park_hits_the_box(old_base
     # at least 8 samples per mm of hand travel (finer than the 1 mm clearance).
     distance = pickups[0].strategy.grasp.distance  # the single grasp distance (L2595)
     grasp = Grasp(math.pi, 100 * DEG, distance)
-    found = ctx.best_rated(ctx.world_pin * grasp.pin_from_hand())
-    assert found is not None
-    approach = transform_pin_approach(grasp, ctx.options.grasp_approach_distance)
-    q_app = ctx.nearest(ctx.world_pin * approach, found[0])
-    assert q_app is not None
+    found = reached_grasp(ctx, grasp)
+    assert not isinstance(found, Rejection)
+    q_app = found[0]
     scene = ctx.gross.empty_hand(hand_openings(ctx.pin_shape.diameter, ctx.options)[0])
     travel = np.linalg.norm(
         ctx.arm.forward(q_app).translation - ctx.arm.forward(ctx.q_park).translation

@@ -23,6 +23,7 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from synth.models.arm.arm import Arm
+from synth.models.arm.rating import nearest_solution
 from synth.models.arm.stanford import StanfordInverse, stanford_inverse_all
 
 __all__ = ["ReachProblem", "describe_pose", "solve_near"]
@@ -48,9 +49,9 @@ def describe_pose(pose: pin.SE3) -> str:
 
 def solve_near(arm: Arm, pose: pin.SE3, near: NDArray[np.float64]) -> NDArray[np.float64]:
     """The attainable configuration reaching ``pose`` nearest ``near``; ReachProblem if none."""
-    solutions = arm.inverse(pose, hint=near)
-    if solutions:
-        return min(solutions, key=lambda q: float(np.max(np.abs(q - near)))).copy()
+    q = nearest_solution(arm, arm.inverse(pose, hint=near), near)
+    if q is not None:
+        return q
     raise _problem(arm, pose)
 
 

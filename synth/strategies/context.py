@@ -22,7 +22,14 @@ from synth.errors.bounds import Interval, bound_linear
 from synth.errors.locate import believed_graph
 from synth.errors.parameters import ParameterSpace
 from synth.exceptions import SpecError, UnreachableError
-from synth.models.arm import Arm, CollisionScene, load_arm, motion_time, rank_solutions
+from synth.models.arm import (
+    Arm,
+    CollisionScene,
+    load_arm,
+    motion_time,
+    nearest_solution,
+    rank_solutions,
+)
 from synth.models.graph import AttributeGraph, pose_to_se3
 from synth.models.insertion import InsertionParameters, derive
 from synth.models.spec import HandSpec, HoleShape, PinShape, TaskSpec, Uncertainty
@@ -131,25 +138,16 @@ class PlanContext:
         self.counters.ik += 1
         return self.arm.inverse(transform_world_hand)
 
-    def best_rated(self, transform_world_hand: pin.SE3) -> tuple[Configuration, float] | None:
-        """The best configuration by the seed's rating |45° − θ5| (L2096) and its cost [rad]."""
-        found = self.solutions(transform_world_hand)
-        if not found:
-            return None
-        best = rank_solutions(self.arm, found)[0]
-        return best.q, best.cost
-
     def nearest(self, transform_world_hand: pin.SE3, q_from: Configuration) -> Configuration | None:
         """The configuration reaching a pose that is quickest to reach from ``q_from``.
 
-        Among the solutions, the one minimising ``max_j |Δq_j| / v_j`` (the seed's motion-time
-        rule without grace, L3846), so consecutive points of a move stay on one arm branch.
+        :func:`synth.models.arm.nearest_solution`, the rule the replay moves by: consecutive
+        points of a move stay on one arm branch (counted as one IK call).
         """
-        found = self.solutions(transform_world_hand)
-        if not found:
-            return None
-        speed = self.arm.limits.velocity
-        return min(found, key=lambda q: float(np.max(np.abs(q - q_from) / speed)))
+        self.counters.ik += 1
+        return nearest_solution(
+            self.arm, self.arm.inverse(transform_world_hand, hint=q_from), q_from
+        )
 
     def motion(self, waypoints: list[Configuration]) -> float:
         """Duration [s] of a move through ``waypoints`` by the configured rule (one call)."""

@@ -28,6 +28,7 @@ import numpy as np
 import pinocchio as pin
 import shapely
 
+from synth.models.arm import SEED_GRASP_RATING
 from synth.models.spec import HandSpec, PinShape
 from synth.models.world import World
 from synth.strategies.context import Configuration, PinEnd, PlanContext
@@ -249,21 +250,21 @@ def generate_pickups(
                 label = f"γ={math.degrees(gamma):.0f}° d={100 * d:.2f} cm"
                 rejected.append(Rejection(label, problem))
                 continue
-            rated: list[tuple[float, int, Grasp, Configuration]] = []
+            rated: list[tuple[float, int, Grasp, Configuration, Configuration]] = []
             for k, omega in enumerate(omegas):
                 grasp = Grasp(omega, gamma, d)
-                found = ctx.best_rated(ctx.world_pin * grasp.pin_from_hand())
-                if found is None:
-                    rejected.append(
-                        Rejection(grasp_label(grasp), "no arm solution at the grasp point")
-                    )
+                found = reached_grasp(ctx, grasp)
+                if isinstance(found, Rejection):
+                    rejected.append(found)
                     continue
-                rated.append((found[1], k, grasp, found[0]))
+                q_approach, q_grasp = found
+                rating = float(SEED_GRASP_RATING(ctx.arm, q_grasp))
+                rated.append((rating, k, grasp, q_approach, q_grasp))
             # Ratings equal to 1e-9 rad are ties (γ = 180°: θ5 does not depend on ω); ties keep
             # the ω order, so float noise cannot decide which ω survive the pruning.
             rated.sort(key=lambda r: (round(r[0], 9), r[1]))
             keep = rated if try_harder else rated[: opts.keep_omegas]
-            for cost, _, grasp, _ in rated[len(keep) :]:
+            for cost, _, grasp, _, _ in rated[len(keep) :]:
                 rejected.append(
                     Rejection(
                         grasp_label(grasp),
@@ -271,8 +272,10 @@ def generate_pickups(
                         f"{opts.keep_omegas} ω are kept (seed L2122; --try-harder keeps all)",
                     )
                 )
-            for cost, _, grasp, q_grasp in keep:
-                made = _pickup(ctx, grasp, cost, q_grasp, approach_opening, grasp_opening)
+            for cost, _, grasp, q_approach, q_grasp in keep:
+                made = _pickup(
+                    ctx, grasp, cost, q_approach, q_grasp, approach_opening, grasp_opening
+                )
                 if isinstance(made, Rejection):
                     rejected.append(made)
                 else:
@@ -280,22 +283,41 @@ def generate_pickups(
     return pickups, rejected
 
 
+def reached_grasp(
+    ctx: PlanContext, grasp: Grasp
+) -> tuple[Configuration, Configuration] | Rejection:
+    """The configurations the program reaches at the grasp's approach point and at the grasp.
+
+    The pickup is the program's first motion, ``MOVE hand TO grasp VIA approach`` from the park
+    (L2723–2724); each target is solved nearest the configuration before it
+    (:meth:`PlanContext.nearest`), as the arm will move. The seed rates "the" arm solution at
+    the grasp (L2096); with several solutions (wrist flips) the one rated here is the one the
+    arm will be in, so the rating, the timing and the swept path agree with the program.
+    """
+    approach_xf = transform_pin_approach(grasp, ctx.options.grasp_approach_distance)
+    q_approach = ctx.nearest(ctx.world_pin * approach_xf, ctx.q_park)
+    if q_approach is None:
+        return Rejection(grasp_label(grasp), "no arm solution at the grasp's approach point")
+    q_grasp = ctx.nearest(ctx.world_pin * grasp.pin_from_hand(), q_approach)
+    if q_grasp is None:
+        return Rejection(grasp_label(grasp), "no arm solution at the grasp point")
+    return q_approach, q_grasp
+
+
 def _pickup(
     ctx: PlanContext,
     grasp: Grasp,
     rating: float,
+    q_approach: Configuration,
     q_grasp: Configuration,
     approach_opening: float,
     grasp_opening: float,
 ) -> Pickup | Rejection:
-    """Approach and departure points, their arm solutions and the pickup's time (§4.3.3)."""
+    """Departure point, the gross-motion check and the pickup's time (§4.3.3)."""
     opts = ctx.options
     transform_pin_hand = grasp.pin_from_hand()
     approach_xf = transform_pin_approach(grasp, opts.grasp_approach_distance)
     lift = opts.departure_lift + ctx.d_i
-    q_approach = ctx.nearest(ctx.world_pin * approach_xf, q_grasp)
-    if q_approach is None:
-        return Rejection(grasp_label(grasp), "no arm solution at the grasp's approach point")
     q_departure = ctx.nearest(ctx.world_pin * _translation(lift) * transform_pin_hand, q_grasp)
     if q_departure is None:
         return Rejection(grasp_label(grasp), "no arm solution at the departure point")

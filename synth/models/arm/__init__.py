@@ -34,6 +34,7 @@ from synth.models.arm.rating import (
     RatedSolution,
     SolutionRating,
     best_solution,
+    nearest_solution,
     rank_solutions,
 )
 from synth.models.arm.stanford import (
@@ -103,6 +104,7 @@ __all__ = [
     "load_stanford_parameters",
     "load_urdf_arm",
     "motion_time",
+    "nearest_solution",
     "plan_trajectory",
     "rank_solutions",
     "seed_motion_time",

@@ -118,3 +118,26 @@ def rank_solutions(
         q = np.array(s, dtype=float)
         rated.append(RatedSolution(float(rating(arm, q)), i, q))
     return sorted(rated, key=lambda r: (r.cost, r.index))
+
+
+def nearest_solution(
+    arm: Arm, solutions: Sequence[ArrayLike], q_from: ArrayLike
+) -> NDArray[np.float64] | None:
+    """The solution with the smallest largest joint change from ``q_from``: min max_j |Δq_j|.
+
+    How a program's targets become configurations, for the planner and the replay alike, so
+    consecutive targets of a move stay on one arm branch; ties keep the input order. Not
+    weighted by joint speed: the wrist joints are the fastest, and a speed-weighted rule can
+    prefer flipping the wrist (θ4, θ6 by π) to a small shoulder move, which swings the hand and
+    the pin through the work (the seed's tap listing, L2831, pushed the pin into the box top
+    that way). None when there is no solution.
+    """
+    start = np.asarray(q_from, dtype=float)
+    best: NDArray[np.float64] | None = None
+    best_change = math.inf
+    for s in solutions:
+        q = np.array(s, dtype=float)
+        change = float(np.max(np.abs(q - start)))
+        if change < best_change:
+            best, best_change = q, change
+    return best
