@@ -13,6 +13,7 @@ import math
 from pathlib import Path
 
 import pytest
+from _tasks import plannable
 
 from synth.cli import main
 from synth.exceptions import NoStrategyError
@@ -171,18 +172,9 @@ def test_no_strategy_when_the_box_is_out_of_reach(tmp_path, capsys) -> None:
     assert "has arm solutions at the approach and destination points of BH1" in err
 
 
-def _plannable() -> list[Path]:
-    out = []
-    for path in sorted(FIXTURES.glob("*.yaml")):
-        spec = load_task(path)
-        if spec.insertion is not None and spec.manipulator is not None:
-            out.append(path)
-    return out
-
-
 @pytest.mark.parametrize(
     "path",
-    [p for p in _plannable() if p.stem not in ("seed_4_8", "seed_4_8_tap")],  # those: above
+    [p for p in plannable() if p.stem not in ("seed_4_8", "seed_4_8_tap")],  # those: above
     ids=lambda p: p.stem,
 )
 def test_every_other_fixture_best_first_equals_exhaustive(path: Path) -> None:

@@ -19,11 +19,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _tasks import plannable, with_base
 
 from synth.codegen.emitter import emit_program
 from synth.errors.locate import believed_graph
 from synth.models.loader import load_task
-from synth.models.spec import Pose, TaskSpec
+from synth.models.spec import TaskSpec
 from synth.replay import replay
 from synth.strategies import plan_task
 from synth.strategies.context import build_context
@@ -40,20 +41,9 @@ OBSTRUCTED = "ω=180° γ=100° d=3.54 cm"
 DEG = math.pi / 180
 
 
-def at_base(spec: TaskSpec, x_cm: float, y_cm: float, yaw_deg: float) -> TaskSpec:
-    """``spec`` with the arm's base moved (the rest of the workcell unchanged)."""
-    manipulator = spec.manipulator
-    assert manipulator is not None
-    base = Pose.model_validate(
-        {"translation": [f"{x_cm} cm", f"{y_cm} cm", "0 cm"], "rotation": [{"z": f"{yaw_deg} deg"}]}
-    )
-    arm = manipulator.arm.model_copy(update={"base": base})
-    return spec.model_copy(update={"manipulator": manipulator.model_copy(update={"arm": arm})})
-
-
 @pytest.fixture(scope="module")
 def old_base() -> TaskSpec:
-    return at_base(load_task(FIXTURES / "seed_4_8.yaml"), 20, 80, 225)
+    return with_base(load_task(FIXTURES / "seed_4_8.yaml"), 20, 80, 225)
 
 
 def test_the_sweep_rejects_the_pickup_whose_move_from_park_hits_the_box(old_base) -> None:
@@ -98,16 +88,7 @@ def test_without_the_sweep_the_replay_catches_the_collision(old_base, monkeypatc
     assert accepted.nominal.outcome == "success", accepted.nominal.message
 
 
-def _plannable() -> list[Path]:
-    out = []
-    for path in sorted(FIXTURES.glob("*.yaml")):
-        spec = load_task(path)
-        if spec.insertion is not None and spec.manipulator is not None:
-            out.append(path)
-    return out
-
-
-@pytest.mark.parametrize("path", _plannable(), ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", plannable(), ids=lambda p: p.stem)
 def test_every_planned_program_replays_in_the_nominal_world(path: Path) -> None:
     spec = load_task(path)
     result = plan_task(spec, base_dir=path.parent)

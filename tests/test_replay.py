@@ -18,13 +18,13 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
+from _tasks import with_base
 
 from synth.al.parser import parse_program
 from synth.cli import main
 from synth.exceptions import ALSyntaxError
 from synth.models.graph import pose_to_se3
 from synth.models.loader import load_task
-from synth.models.spec import Pose, TaskSpec
 from synth.replay import (
     HandErrors,
     build_context,
@@ -49,17 +49,6 @@ def axis_angle(axis: tuple[float, float, float], rad: float) -> np.ndarray:
     k /= np.linalg.norm(k)
     K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
     return np.eye(3) + math.sin(rad) * K + (1 - math.cos(rad)) * K @ K
-
-
-def with_base(spec: TaskSpec, x_cm: float, y_cm: float, yaw_deg: float) -> TaskSpec:
-    """``spec`` with the arm standing at (x, y) on the table, turned by ``yaw`` about z."""
-    manipulator = spec.manipulator
-    assert manipulator is not None
-    base = Pose.model_validate(
-        {"translation": [f"{x_cm} cm", f"{y_cm} cm", "0 cm"], "rotation": [{"z": f"{yaw_deg} deg"}]}
-    )
-    arm = manipulator.arm.model_copy(update={"base": base})
-    return spec.model_copy(update={"manipulator": manipulator.model_copy(update={"arm": arm})})
 
 
 # Where the seed_4_8 fixtures stand the arm (fixtures/arms/stanford.yaml says why): (20, 70) cm,

@@ -1,0 +1,31 @@
+"""Task fixtures shared by the planner and replay tests: variants and the plannable set."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from synth.models.loader import load_task
+from synth.models.spec import Pose, TaskSpec
+
+FIXTURES = Path(__file__).resolve().parent.parent / "fixtures" / "tasks"
+
+
+def with_base(spec: TaskSpec, x_cm: float, y_cm: float, yaw_deg: float) -> TaskSpec:
+    """``spec`` with the arm standing at (x, y) on the table, turned by ``yaw`` about z."""
+    manipulator = spec.manipulator
+    assert manipulator is not None
+    base = Pose.model_validate(
+        {"translation": [f"{x_cm} cm", f"{y_cm} cm", "0 cm"], "rotation": [{"z": f"{yaw_deg} deg"}]}
+    )
+    arm = manipulator.arm.model_copy(update={"base": base})
+    return spec.model_copy(update={"manipulator": manipulator.model_copy(update={"arm": arm})})
+
+
+def plannable() -> list[Path]:
+    """The fixture tasks ``synth plan`` accepts: with an insertion and a manipulator."""
+    out = []
+    for path in sorted(FIXTURES.glob("*.yaml")):
+        spec = load_task(path)
+        if spec.insertion is not None and spec.manipulator is not None:
+            out.append(path)
+    return out
