@@ -32,10 +32,10 @@ def table():
 
 
 def seed_box():
-    # The seed's box (fixture seed_4_8): 8.98 × 7.60 × 4.90 cm, bottom centre at (45.2, 102, 0) cm.
+    # The seed's box (fixture seed_4_8): 8.90 × 7.60 × 4.90 cm, bottom centre at (45.2, 102, 0) cm.
     return (
         "BOX",
-        coal.Box(0.0898, 0.0760, 0.0490),
+        coal.Box(0.0890, 0.0760, 0.0490),
         pin.SE3(np.eye(3), np.array([0.452, 1.02, 0.0245])),
     )
 

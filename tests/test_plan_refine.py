@@ -122,10 +122,11 @@ def test_tapping_place_search_follows_l2300(tap) -> None:
     ]
     ring = np.array([(x, y) for x, y, _ in place.ring]) / CM
     np.testing.assert_allclose(ring[:8], seed_xy, atol=0.006)
-    # Scores: (5.06, 3.20) lies off the box: −(5.062 − 4.49) = −.572 cm here; the seed's −.612
-    # puts its edge at x = 4.45 cm. Off the top edge at (2.87, 3.91): −.11 (seed −.111).
+    # Scores: (5.06, 3.20) lies off the box: −(5.062 − 4.45) = −.612 cm (seed −.612, L2346).
+    # Off the top edge at (2.87, 3.91): −.11 (seed −.111).
     d = np.array([d for _, _, d in place.ring]) / CM
-    assert d[0] == pytest.approx(-(3.85 + 1.212 - 4.49), abs=0.002)
+    assert d[0] == pytest.approx(-(3.85 + 1.212 - 4.45), abs=0.002)
+    assert d[0] == pytest.approx(-0.612, abs=0.002)
     assert d[4] == pytest.approx(-0.111, abs=0.002)
     # The seed picked (2.64, 3.20), d = .577 (0.60 to the top edge in our outline), because its
     # box top had features at (2.87, 2.49) and (3.48, 2.05) (d = −.115, .229) that the seed does

@@ -26,7 +26,7 @@ frames:
     parent: world
     pose: {translation: [45.2 cm, 102 cm, 0 cm]}
     uncertainty: {x: 0.3 in, y: 0.2 in, rz: 5 deg}
-    shape: {type: box, size: [8.98 cm, 7.60 cm, 4.90 cm]}
+    shape: {type: box, size: [8.90 cm, 7.60 cm, 4.90 cm]}
   # ... the rest of fixtures/tasks/seed_4_8.yaml
 insertion: {pin: PIN1, hole: BH1, start_hole: RH1, d_f: 1.71 cm, dr_ok: 0.762 cm}
 """

@@ -30,7 +30,7 @@ far either body may be from its believed place (``SweepOptions.margins``):
   with r about the hand origin (taken at the park configuration: wrist bodies turn about the
   wrist centre, which changes r by centimetres and the margin by θ_max·Δr < 1 mm).
 
-Seed_4_8 gives BOX a margin of 1.69 cm (0.3 in, 0.2 in, 5° at the 8.8 cm of its bounding ball),
+Seed_4_8 gives BOX a margin of 1.68 cm (0.3 in, 0.2 in, 5° at the 8.8 cm of its bounding ball),
 the fingers 0.29 cm and the wrist 0.5–0.64 cm:
 without them the planner's program for seed_4_8 at the arm's first base, (20, 80) cm, left
 the box 1 mm and hit it with wrist_body in 56 of 300 sampled worlds.
