@@ -7,9 +7,10 @@ object that the straight line between the two sites misses: with the seed_4_8 ar
 (20, 80) cm, the planner's move from BPARK to the rack swept finger_left through BOX, and the
 replay refused the program (issue 5). So every candidate's gross motions are swept here, with
 Coal and conservative advancement (:func:`synth.models.arm.swept_path`), along the straight
-joint-space segments between the configurations the planner timed (on every fixture these are
-the ones the replay reaches by solving each target nearest its current configuration from the
-park on; ``tests/test_plan_clearance.py`` checks it):
+joint-space segments between the configurations the program will move through: each target
+solved nearest the configuration before it, from the park on
+(:func:`synth.models.arm.nearest_solution`, the replay's rule too;
+``tests/test_plan_clearance.py`` checks that they agree):
 
 1. ``park → grasp approach``: empty hand, fingers at the approach opening (L2139); every solid
    of the workcell (:mod:`synth.models.workcell`: table, boxes, racks, fixtures) and the pin
@@ -31,14 +32,14 @@ far either body may be from its believed place (``SweepOptions.margins``):
   wrist centre, which changes r by centimetres and the margin by θ_max·Δr < 1 mm).
 
 Seed_4_8 gives BOX a margin of 1.68 cm (0.3 in, 0.2 in, 5° at the 8.8 cm of its bounding ball),
-the fingers 0.29 cm and the wrist 0.5–0.64 cm:
-without them the planner's program for seed_4_8 at the arm's first base, (20, 80) cm, left
-the box 1 mm and hit it with wrist_body in 56 of 300 sampled worlds.
+the fingers 0.29 cm and the wrist 0.5–0.64 cm: without them the planner's program for seed_4_8
+at the arm's first base, (20, 80) cm, left the box 1 mm and hit it with wrist_body in 56 of 300
+sampled worlds.
 
-A candidate whose gross motion comes closer than that to a solid is rejected, the bodies
-named. The fine motions (approach → grasp → departure at the start hole,
-approach → hole with its guarded insertion, search and tap moves) stay with the seed's geometric
-conditions and with the replay, which sweeps every motion and decides every contact.
+A candidate whose gross motion comes closer than that to a solid is rejected, the bodies named.
+The fine motions (approach → grasp → departure at the start hole, approach → hole with its
+guarded insertion, search and tap moves) stay with the seed's geometric conditions and with the
+replay, which sweeps every motion and decides every contact.
 """
 
 from __future__ import annotations
