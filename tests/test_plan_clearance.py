@@ -104,7 +104,7 @@ def test_box_margin_bounds_every_sampled_displacement_of_its_corners() -> None:
     # 20 000 uniform errors (the extreme points of a box are its corners).
     spec = load_task(FIXTURES / "seed_4_8.yaml")
     ctx = build_context(spec)
-    margin = ctx.gross.options.margins["BOX"]
+    margin = ctx.gross.empty.margins["BOX"]
     t_max = math.hypot(0.3 * 0.0254, 0.2 * 0.0254)
     radius = math.hypot(4.45, 3.80, 4.90 / 2) * 0.01 + 4.90 / 2 * 0.01  # |aabb centre| + ρ
     assert margin == pytest.approx(t_max + math.radians(5) * radius, rel=1e-9)

@@ -105,15 +105,19 @@ class GrossMotionCheck:
     """Sweeps of gross motions in the believed workcell (see the module docstring).
 
     ``solids`` are the static solids at their nominal poses; ``carried`` the pin to be moved,
-    ``pin_standing`` the same pin as an obstacle in its start hole. Scenes are cached by finger
-    opening and grasp. Not thread-safe (Coal data), like :class:`CollisionScene`.
+    ``pin_standing`` the same pin as an obstacle in its start hole. ``empty`` and ``carrying``
+    are the sweep options (margins) of the two kinds of scene: the pin is an obstacle with its
+    pose error in the first, a body of the hand with the hand's error in the second. Scenes are
+    cached by finger opening and grasp. Not thread-safe (Coal data), like
+    :class:`CollisionScene`.
     """
 
     arm: Arm
     solids: tuple[Obstacle, ...]
     carried: PinModel
     pin_standing: Obstacle
-    options: SweepOptions = field(default_factory=SweepOptions)
+    empty: SweepOptions = field(default_factory=SweepOptions)
+    carrying: SweepOptions = field(default_factory=SweepOptions)
     _scenes: dict[tuple[object, ...], CollisionScene] = field(default_factory=dict)
 
     @staticmethod
@@ -134,11 +138,12 @@ class GrossMotionCheck:
         carried = model.pins[pin_frame]
         pin_standing = model.pin_obstacle(pin_frame, graph.world_from(pin_frame))
         frames = {graph.al_names[name]: name for name in graph.nodes}
-        margins: dict[str, float] = {}
-        for obstacle in (*workcell.obstacles, pin_standing):
+        solids: dict[str, float] = {}
+        for obstacle in workcell.obstacles:
             frame = frames.get(obstacle.name)
             if frame is not None:
-                margins[obstacle.name] = solid_margin(graph, frame, obstacle.geometry)
+                solids[obstacle.name] = solid_margin(graph, frame, obstacle.geometry)
+        moving: dict[str, float] = {}  # the arm's bodies near the hand, and the held pin
         if hand_error is not None:
             probe = CollisionScene(
                 arm,
@@ -151,11 +156,21 @@ class GrossMotionCheck:
                 if body.role in ("hand", "held") or body.joint >= wrist:
                     placed = hand.actInv(probe.body_pose(q_reference, body.name))
                     radius = bounding_radius(body.geometry, placed)
-                    margins[body.name] = margins.get(body.name, 0.0) + link_margin(
-                        hand_error, radius
-                    )
-        options = SweepOptions(margins=margins)
-        return GrossMotionCheck(arm, workcell.obstacles, carried, pin_standing, options)
+                    moving[body.name] = link_margin(hand_error, radius)
+        standing = solid_margin(graph, pin_frame, pin_standing.geometry)
+        arm_only = {name: m for name, m in moving.items() if name != carried.name}
+        return GrossMotionCheck(
+            arm,
+            workcell.obstacles,
+            carried,
+            pin_standing,
+            empty=SweepOptions(margins={**solids, **arm_only, carried.name: standing}),
+            carrying=SweepOptions(margins={**solids, **moving}),
+        )
+
+    def options_for(self, scene: CollisionScene) -> SweepOptions:
+        """The margins of ``scene``: holding the pin, or with the pin standing in the cell."""
+        return self.empty if scene.held is None else self.carrying
 
     def empty_hand(self, opening: float) -> CollisionScene:
         """The arm with open fingers among the solids and the standing pin."""
@@ -191,13 +206,14 @@ class GrossMotionCheck:
         self, scene: CollisionScene, waypoints: Sequence[NDArray[np.float64]], motion: str
     ) -> str | None:
         """Why the joint-space path through ``waypoints`` is not clear, or None when it is."""
-        result = swept_path(scene, list(waypoints), self.options)
+        options = self.options_for(scene)
+        result = swept_path(scene, list(waypoints), options)
         if result.free:
             return None
         a, b = result.pair if result.pair is not None else ("?", "?")
         if a in {o.name for o in scene.environment}:
             a, b = b, a
-        required = float(self.options.required([(a, b)])[0])
+        required = float(options.required([(a, b)])[0])
         x, y, z = (100.0 * float(v) for v in self.arm.forward(result.q).translation)
         return (
             f"the {motion} sweeps {a} into {b} ({100 * result.distance:.2f} cm apart where "
