@@ -288,6 +288,21 @@ def test_cli_exit_codes(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> N
     assert code == 2 and "NOSUCH" in out
 
 
+def test_cli_distribution_override_is_stated_and_checked(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    search = str(DATA / "seed_4_8_search.al")
+    args = (search, "--task", str(SEED), "--trials", "2", "--workers", "1")
+    code, out, _ = run_cli(*args, "--distribution", "normal", capsys=capsys)
+    assert code == 0 and "every block sampled normal (--distribution)" in out
+    code, out, _ = run_cli(*args, capsys=capsys)
+    assert code == 0 and "--distribution" not in out
+    with pytest.raises(SystemExit) as exit_info:  # argparse names the option and the choices
+        main(["replay", *args, "--distribution", "triangular"])
+    assert exit_info.value.code == 2
+    assert "--distribution: invalid choice: 'triangular'" in capsys.readouterr().err
+
+
 def test_cli_preamble_is_the_binding_as_al(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, _ = run_cli("--preamble", "--task", str(SEED), capsys=capsys)
     assert code == 0

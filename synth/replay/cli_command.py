@@ -152,6 +152,8 @@ def run_replay(args: argparse.Namespace) -> int:
         print(json.dumps(report.to_json(), indent=2))
     else:
         print(replay_summary(report))
+        if args.distribution is not None and args.trials:
+            print(f"  errors: every block sampled {args.distribution} (--distribution)")
     if report.ok:
         return 0
     return 2 if report.nominal.outcome == "error" else 1
