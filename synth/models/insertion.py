@@ -27,7 +27,11 @@ from synth.models.spec import HoleShape, InsertionSpec, PinShape
 
 @dataclass(frozen=True)
 class InsertionParameters:
-    """d_f, d_s, Δr_ok [m], Δθ_ok [rad], the direction, and where each value came from."""
+    """d_f, d_s, Δr_ok [m], Δθ_ok [rad], the direction, and where each value came from.
+
+    ``lead`` [m] is the parts' geometric lead (the derived Δr_ok): what the replay's contact
+    geometry captures, whatever Δr_ok the task gives.
+    """
 
     pin: str
     hole: str
@@ -38,6 +42,7 @@ class InsertionParameters:
     dr_ok: float
     dtheta_ok: float
     source: dict[str, str]
+    lead: float = 0.0
 
 
 def derive(graph: AttributeGraph, spec: InsertionSpec) -> InsertionParameters:
@@ -63,4 +68,6 @@ def derive(graph: AttributeGraph, spec: InsertionSpec) -> InsertionParameters:
     values["dtheta_ok"] = derived_dtheta if spec.dtheta_ok is None else spec.dtheta_ok
     source["dtheta_ok"] = "derived" if spec.dtheta_ok is None else "given"
     start = graph.resolve(spec.start_hole) if spec.start_hole else None
-    return InsertionParameters(pin_name, hole_name, start, spec.direction, source=source, **values)
+    return InsertionParameters(
+        pin_name, hole_name, start, spec.direction, source=source, lead=derived["dr_ok"], **values
+    )

@@ -135,6 +135,12 @@ def refine(ctx: PlanContext, cand: Candidate) -> Refined | Rejection:
             f"{search.expected_points} points within Δx/2, Δy/2 expected at "
             f"{cand.try_time:.2f} s each = {search.time:.2f} s"
         )
+        if ins.dr_ok > ins.lead + 1e-9:
+            decisions.append(
+                f"note: the task's Δr_ok = {_cm(ins.dr_ok)} (measured, seed L1963) exceeds the "
+                f"parts' geometric lead {_cm(ins.lead)} (chamfer + hole radius − tip radius); "
+                "the search spacing follows Δr_ok, the replay captures within the lead"
+            )
     else:
         decisions.append(
             f"no search: error footprint ±{_cm(fp.dx)} × ±{_cm(fp.dy)} is within Δr_ok = "
