@@ -42,7 +42,7 @@ class InsertionParameters:
     dr_ok: float
     dtheta_ok: float
     source: dict[str, str]
-    lead: float = 0.0
+    lead: float
 
 
 def derive(graph: AttributeGraph, spec: InsertionSpec) -> InsertionParameters:

@@ -2,7 +2,7 @@
 
 Built from the task's shapes and placed at any set of poses: the *true* poses of a replay trial
 (:mod:`synth.replay.truth`) or the nominal ones the planner believes
-(:func:`nominal_poses`, for its gross-motion check, :mod:`synth.strategies.clearance`):
+(:class:`NominalPoses`, for its gross-motion check, :mod:`synth.strategies.clearance`):
 
 * the table: a slab whose top face is the world plane z = 0 (the world frame is the work
   station, :data:`synth.models.spec.WORLD`), ``TABLE_THICKNESS`` thick, reaching

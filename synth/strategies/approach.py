@@ -124,7 +124,7 @@ def plan_approach(ctx: PlanContext, pickup: Pickup) -> Candidate | Rejection:
             f"{ctx.hole_al}",
         )
     # The quickest φ (L2160) whose transport is clear of the workcell.
-    carrying = ctx.gross.holding(grasp.pin_from_hand().inverse())
+    carrying = ctx.gross.holding(grasp)
     best: tuple[float, float, Configuration, Configuration] | None = None
     first_reason: str | None = None
     for entry in sorted(timed, key=lambda e: (e[0], e[1])):

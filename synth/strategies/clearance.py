@@ -66,6 +66,7 @@ from synth.models.arm.bodies import bounding_radius
 from synth.models.graph import AttributeGraph
 from synth.models.spec import Uncertainty
 from synth.models.workcell import NominalPoses, PinModel, WorkcellModel
+from synth.strategies.records import Grasp
 
 __all__ = ["GrossMotionCheck", "link_margin", "solid_margin"]
 
@@ -182,8 +183,9 @@ class GrossMotionCheck:
             self._scenes[key] = scene
         return scene
 
-    def holding(self, transform_hand_pin: pin.SE3) -> CollisionScene:
-        """The arm holding the pin at ``transform_hand_pin``, fingers closed on it."""
+    def holding(self, grasp: Grasp) -> CollisionScene:
+        """The arm holding the pin by ``grasp``, fingers closed on it."""
+        transform_hand_pin = grasp.pin_from_hand().inverse()
         key = ("holding", tuple(np.round(transform_hand_pin.homogeneous, 9).reshape(-1)))
         scene = self._scenes.get(key)
         if scene is None:

@@ -133,13 +133,8 @@ class PlanContext:
         """Nominal initial pose of the pin in the world."""
         return self.graph.world_from(self.pin_frame)
 
-    def solutions(self, transform_world_hand: pin.SE3) -> list[Configuration]:
-        """Every arm configuration reaching a hand pose (counted as one IK call)."""
-        self.counters.ik += 1
-        return self.arm.inverse(transform_world_hand)
-
     def nearest(self, transform_world_hand: pin.SE3, q_from: Configuration) -> Configuration | None:
-        """The configuration reaching a pose that is quickest to reach from ``q_from``.
+        """The configuration reaching a pose with the smallest largest joint change from ``q_from``.
 
         :func:`synth.models.arm.nearest_solution`, the rule the replay moves by: consecutive
         points of a move stay on one arm branch (counted as one IK call).

@@ -248,7 +248,7 @@ def plan_tap(ctx: PlanContext, cand: Candidate, footprint: ErrorFootprint) -> Ta
     if q_via is None or q_contact is None:
         return Rejection(cand.name, f"no arm solution at the tapping place {offset} m")
     blocked = ctx.obstruction(
-        ctx.gross.holding(grasp.pin_from_hand().inverse()),
+        ctx.gross.holding(grasp),
         [cand.pickup.q_departure, q_via],
         f"transport to the tap's via point above {ctx.graph.al_names[surface]}",
     )
