@@ -7,6 +7,9 @@ and every branch of the program is settled in this module, from the record — t
 only iterate over view fields and test whether an optional piece is present:
 
 - *tap* (L2516–2519): emitted when the record has a :class:`~synth.strategies.records.Tap`;
+- *first attempt* (L2731–2737): ``MOVE pin TO target VIA approach, approach vias…`` — the
+  record's via points along the hole axis (they bound the joint-interpolated path's bow), the
+  same shifted to each search point;
 - *search* (L2520–2530): emitted when the record has a
   :class:`~synth.strategies.records.Search`, otherwise the perfunctory check
   ``IF ABS(DISTANCE_OFF) > threshold THEN ABORT(...)``. The planner decided (seed: Δx > Δr_ok);
@@ -377,7 +380,11 @@ def program_view(strategy: PinInHoleStrategy, graph: AttributeGraph) -> ProgramV
 
     attempt = AttemptView(
         moves=motion_sequence(
-            [_waypoint(names, s.approach, "approach"), _waypoint(names, s.target, "target")],
+            [
+                _waypoint(names, s.approach, "approach"),
+                *(_waypoint(names, v, "approach_vias") for v in s.approach_vias),
+                _waypoint(names, s.target, "target"),
+            ],
             guard=guard,
             field="target",
         ),
@@ -478,7 +485,11 @@ def _search(
         zeta=L.angle(search.zeta, field="search.zeta"),
         zero_length=L.length(0.0),
         moves=motion_sequence(
-            [shifted(s.approach, "approach"), shifted(s.target, "target")],
+            [
+                shifted(s.approach, "approach"),
+                *(shifted(v, "approach_vias") for v in s.approach_vias),
+                shifted(s.target, "target"),
+            ],
             guard=guard if retract is None else replace(guard, message=None),
             field="target",
         ),

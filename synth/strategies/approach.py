@@ -9,10 +9,17 @@ The guarded move of the first attempt is (L2146–2148)::
 φ is chosen like ω: every 45°, an arm solution at the approach and destination points,
 "a single value of ϕ is picked to minimize the expected motion time" (L2155–2160) of the move
 departure → approach → destination, among the φ whose transport (departure → approach) is clear
-of the workcell (:mod:`synth.strategies.clearance`). ``dtry = d_f + 1 in`` and
-``standoff = 1 in`` (L2188–2190). The result is the "embryo" pin-in-hole strategy (L2201) whose
-cost is the pickup time plus the transport time: the candidate that best-first selection
-refines.
+of the workcell (:mod:`synth.strategies.clearance`).
+
+Heights (L2186–2190: "the principal constraint" is that the approach point stays above the
+surface and a full insertion stops on force whatever Δz): the seed takes ``standoff = 1 in``
+and ``dtry = d_f + 1 in``; here they are at least that and at least the certified Δz along the
+axis at the approach point plus :data:`APPROACH_CLEARANCE`, ``standoff ≥ Δz + c`` and
+``dtry − d_f ≥ Δz + c``, so a part whose height is poorly known gets a higher approach instead
+of a rejection. The final approach runs through via points along the axis that bound the bow
+of the joint-interpolated move (:mod:`synth.strategies.bow`). The result is the "embryo"
+pin-in-hole strategy (L2201) whose cost is the pickup time plus the transport time: the
+candidate that best-first selection refines.
 
 Poses are those of the pin end that enters the hole (the tip, or the head when the pin is
 turned over): ``end = hole ∘ trans(rot(ẑ, φ), (0, 0, z))``; the hand is then at
@@ -27,15 +34,28 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from synth.errors.estimate import RelationModel
 from synth.models.world import World
+from synth.strategies.bow import BOW_FRACTION, AxisPath, plan_axis_path
 from synth.strategies.context import Configuration, PlanContext
 from synth.strategies.grasp import Pickup
 from synth.strategies.records import Destination, Grasp, PinInHoleStrategy, Rejection
+from synth.strategies.relations import approach_relation, hole_frame_offset
 
+__all__ = [
+    "APPROACH_CLEARANCE",
+    "Candidate",
+    "approach_heights",
+    "hand_at",
+    "hole_frame_offset",
+    "pin_destination",
+    "plan_approach",
+    "transform_end_hand",
+]
 
-def hole_frame_offset(phi: float, offset: tuple[float, float, float]) -> pin.SE3:
-    """``trans(rot(ẑ, φ), offset)``: a frame in the hole frame [rad, m]."""
-    return pin.SE3(pin.exp3(np.array([0.0, 0.0, phi])), np.array(offset, dtype=float))
+APPROACH_CLEARANCE = 1e-3
+"""[m] the approach point stays this far above the surface, and the guarded insertion aims
+this far past the seat, beyond the certified Δz (the gross-motion sweeps' clearance)."""
 
 
 def transform_end_hand(ctx: PlanContext, grasp: Grasp) -> pin.SE3:
@@ -61,9 +81,9 @@ class Candidate:
 
     ``q_hole_approach``, ``q_destination`` reach the approach point and the pin at depth d_f;
     ``q_surface`` the pin end on the hole's plane (where a miss stops). ``transport_time`` [s]
-    is departure → approach → destination; ``try_time`` [s] one retry: surface → approach →
-    surface, the unit of search time. ``phi_times`` is the φ table of L2170–2180 (None: no arm
-    solution).
+    is departure → approach → (vias above the seat) → destination; ``try_time`` [s] one retry:
+    surface → approach → surface, the unit of search time. ``phi_times`` is the φ table of
+    L2170–2180 (None: no arm solution). ``axis`` is the final approach with its vias and bow.
     """
 
     strategy: PinInHoleStrategy
@@ -75,6 +95,7 @@ class Candidate:
     try_time: float
     phi_times: tuple[tuple[float, float | None], ...]
     world: World
+    axis: AxisPath | None = None
     counter: int = 0
 
     @property
@@ -92,18 +113,37 @@ def _z(z: float) -> pin.SE3:
     return pin.SE3(np.eye(3), np.array([0.0, 0.0, z]))
 
 
+def approach_heights(ctx: PlanContext, pickup: Pickup) -> tuple[float, float, float]:
+    """``(standoff, dtry, Δz)`` [m] for a pickup (module docstring).
+
+    Δz is the certified bound on the pin end's error along the hole axis at the approach point
+    of the option's standoff, φ = 0 (one bound): a change of height or of φ moves the hand
+    error's lever by centimetres and Δz by θ_hand·Δl, far below the clearance.
+    """
+    opts = ctx.options
+    world = pickup.world.set_value("approach-standoff", ctx.pin_al, ctx.hole_al, opts.standoff)
+    model = RelationModel.of(approach_relation(ctx, world, 0.0))
+    ctx.counters.count_bounds(model.space)
+    _, certified = model.displacement_along(np.array([0.0, 0.0, 1.0]))
+    dz = float(certified.magnitude)
+    standoff = max(opts.standoff, dz + APPROACH_CLEARANCE)
+    dtry = ctx.insertion.d_f + max(opts.dtry_extra, dz + APPROACH_CLEARANCE)
+    return standoff, dtry, dz
+
+
 def plan_approach(ctx: PlanContext, pickup: Pickup) -> Candidate | Rejection:
     """The φ with the shortest transport time for one pickup, or why there is none."""
     opts = ctx.options
     grasp = pickup.strategy.grasp
     d_f = ctx.insertion.d_f
+    standoff, dtry, _ = approach_heights(ctx, pickup)
     steps = round(2 * math.pi / opts.phi_step)
     table: list[tuple[float, float | None]] = []
     timed: list[tuple[float, float, Configuration, Configuration]] = []
     for k in range(steps):
         phi = k * opts.phi_step
         q_app = ctx.nearest(
-            hand_at(ctx, grasp, hole_frame_offset(phi, (0.0, 0.0, opts.standoff))),
+            hand_at(ctx, grasp, hole_frame_offset(phi, (0.0, 0.0, standoff))),
             pickup.q_departure,
         )
         q_dest = (
@@ -139,12 +179,33 @@ def plan_approach(ctx: PlanContext, pickup: Pickup) -> Candidate | Rejection:
         first_reason = first_reason or reason
     if best is None:
         return Rejection(pickup.name, f"every φ is obstructed; the quickest: {first_reason}")
-    transport, phi, q_app, q_dest = best
+    _, phi, q_app, q_dest = best
     q_surface = ctx.nearest(hand_at(ctx, grasp, hole_frame_offset(phi, (0.0, 0.0, 0.0))), q_dest)
     if q_surface is None:
         return Rejection(pickup.name, f"no arm solution with the pin on the surface at φ={phi}")
+
+    def solve(z: float, q_from: Configuration) -> Configuration | None:
+        return ctx.nearest(hand_at(ctx, grasp, hole_frame_offset(phi, (0.0, 0.0, z))), q_from)
+
+    tolerance = BOW_FRACTION * min(ctx.insertion.lead, ctx.insertion.dr_ok)
+    axis = plan_axis_path(
+        solve,
+        ctx.arm,
+        q_app,
+        ctx.world_hole.inverse(),
+        transform_end_hand(ctx, grasp).inverse(),
+        standoff,
+        dtry,
+        d_f,
+        tolerance,
+    )
+    if axis is None:
+        return Rejection(pickup.name, f"no arm solution along the axis of {ctx.hole_al} at φ={phi}")
+    above_seat = [
+        q for z, q in zip(axis.heights[1:-1], axis.configurations[1:-1], strict=True) if z > -d_f
+    ]
+    transport = ctx.motion([pickup.q_departure, q_app, *above_seat, q_dest])
     try_time = ctx.motion([q_surface, q_app, q_surface])
-    dtry = d_f + opts.dtry_extra
     name = f"{pickup.name} φ={math.degrees(phi):.0f}°"
     strategy = PinInHoleStrategy(
         pin=ctx.pin_al,
@@ -153,8 +214,8 @@ def plan_approach(ctx: PlanContext, pickup: Pickup) -> Candidate | Rejection:
         pickup=pickup.strategy,
         phi=phi,
         dtry=dtry,
-        standoff=opts.standoff,
-        approach=pin_destination(ctx, "approach", hole_frame_offset(phi, (0, 0, opts.standoff))),
+        standoff=standoff,
+        approach=pin_destination(ctx, "approach", hole_frame_offset(phi, (0, 0, standoff))),
         destination=pin_destination(ctx, "destination", hole_frame_offset(phi, (0, 0, -d_f))),
         target=pin_destination(ctx, "target", hole_frame_offset(phi, (0.0, 0.0, -dtry))),
         d_f=d_f,
@@ -164,8 +225,14 @@ def plan_approach(ctx: PlanContext, pickup: Pickup) -> Candidate | Rejection:
         force_threshold=opts.force_threshold,
         ttime=pickup.strategy.goodness + transport,
         name=name,
+        approach_vias=tuple(
+            pin_destination(ctx, f"approach via {k + 1}", hole_frame_offset(phi, (0.0, 0.0, z)))
+            for k, z in enumerate(axis.via_heights)
+        ),
+        bow=axis.bow,
     )
     world = pickup.world.set_value("approach-phi", ctx.pin_al, ctx.hole_al, round(phi, 12))
+    world = world.set_value("approach-standoff", ctx.pin_al, ctx.hole_al, standoff)
     return Candidate(
-        strategy, pickup, q_app, q_dest, q_surface, transport, try_time, tuple(table), world
+        strategy, pickup, q_app, q_dest, q_surface, transport, try_time, tuple(table), world, axis
     )

@@ -9,6 +9,10 @@ From the relation ``hole⁻¹ ∘ end`` (:mod:`synth.strategies.relations`):
 * in the plane (L2420–2434): ``ξ_k = max |(cos ζ_k, sin ζ_k, 0) · Δp|``, ζ_k = 30°·k,
   ``Δx = max_k ξ_k``, ``Δy = ξ_(k+3) mod 6``, ``ζ = ζ_k``: a rectangle ±Δx × ±Δy turned by ζ.
 
+The approach's path bow (:mod:`synth.strategies.bow`, the joint-interpolated move's largest
+distance from the axis above the seat) is a lateral offset of at most ``b`` in some direction,
+so it adds at most ``b`` to every ξ_k: ``ξ_k + b``.
+
 Decisions use the certified values (first order plus the Taylor remainder); the first-order
 ones, which are the seed's figures, are kept in ``first_order`` for display. ζ here is measured
 in the hole frame; the seed measured it in the hole frame turned by φ (tests/test_errors_seed.py),
@@ -56,10 +60,16 @@ def footprint_tables(
     return model.footprint_table(len(DIRECTIONS))
 
 
-def estimate_footprint(ctx: PlanContext, chain: ErrorChain) -> tuple[ErrorFootprint, RelationModel]:
-    """The footprint of a relation: certified fields, first-order figures in ``first_order``."""
+def estimate_footprint(
+    ctx: PlanContext, chain: ErrorChain, bow: float = 0.0
+) -> tuple[ErrorFootprint, RelationModel]:
+    """The footprint of a relation: certified fields, first-order figures in ``first_order``.
+
+    ``bow`` [m] is added to every ξ_k, certified and first order (module docstring).
+    """
     model = RelationModel.of(chain)
     xi_first, xi_cert = footprint_tables(ctx, model)
+    xi_first, xi_cert = xi_first + bow, xi_cert + bow
     ctx.counters.count_bounds(model.space, TILT_DIRECTIONS)
     tilt_first, tilt_cert = model.tilt_table(TILT_DIRECTIONS)
     ctx.counters.count_bounds(model.space)

@@ -270,6 +270,12 @@ class PinInHoleStrategy:
     retreat: Destination | None = None
     decisions: tuple[str, ...] = ()
     """The planner's reasons in words: why a tap and a search, or why not (seed §4.8)."""
+    approach_vias: tuple[Destination, ...] = ()
+    """Via points along the hole axis between ``approach`` and ``target``, in order: they bound
+    the bow of the joint-interpolated approach (:mod:`synth.strategies.bow`)."""
+    bow: float = 0.0
+    """[m] how far the approach through ``approach_vias`` bows off the hole axis (measured on
+    the arm model, added to the footprint)."""
 
     @property
     def goodness(self) -> float:
@@ -315,6 +321,8 @@ class PinInHoleStrategy:
             "phi": self.phi,
             "dtry": self.dtry,
             "standoff": self.standoff,
+            "approach_vias": [v.to_json() for v in self.approach_vias],
+            "bow": self.bow,
             "tap": None if self.tap is None else self.tap.to_json(),
             "search": None if self.search is None else self.search.to_json(),
             "errors": None

@@ -3,7 +3,7 @@
 For one basic strategy, in its own world:
 
 1. the pin-hole relation at the approach point and its certified footprint
-   (:mod:`synth.strategies.footprint`);
+   (:mod:`synth.strategies.footprint`), widened by the approach's measured path bow;
 2. tilt (§4.5.1): ``Δθ > Δθ_ok`` rejects the strategy (L2290);
 3. the guarded moves must work whatever Δz: ``Δz < standoff`` (the approach point stays above
    the surface) and ``Δz < dtry − d_f`` (a full insertion stops on force, not on arrival) —
@@ -67,7 +67,8 @@ def refine(ctx: PlanContext, cand: Candidate) -> Refined | Rejection:
     """Apply §4.5 to one candidate: a refined strategy or the reason it fails."""
     opts, ins = ctx.options, ctx.insertion
     phi = cand.strategy.phi
-    fp, _ = estimate_footprint(ctx, approach_relation(ctx, cand.world, phi))
+    standoff = cand.strategy.standoff
+    fp, _ = estimate_footprint(ctx, approach_relation(ctx, cand.world, phi), bow=cand.strategy.bow)
     decisions: list[str] = []
     if fp.dtheta > ins.dtheta_ok:
         return Rejection(
@@ -76,10 +77,10 @@ def refine(ctx: PlanContext, cand: Candidate) -> Refined | Rejection:
             "(seed §4.5.1: grounds for rejection)",
         )
     decisions.append(f"tilt Δθ = {_deg(fp.dtheta)} ≤ Δθ_ok = {_deg(ins.dtheta_ok)}")
-    if fp.dz >= opts.standoff:
+    if fp.dz >= standoff:
         return Rejection(
             cand.name,
-            f"Δz = {_cm(fp.dz)} ≥ standoff {_cm(opts.standoff)}: the approach point could lie "
+            f"Δz = {_cm(fp.dz)} ≥ standoff {_cm(standoff)}: the approach point could lie "
             "in the object (seed L2186)",
         )
     if fp.dz >= cand.strategy.dtry - ins.d_f:

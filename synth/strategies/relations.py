@@ -29,8 +29,7 @@ from synth.errors.chain import ErrorChain, Fixed, Perturbation, Term
 from synth.errors.parameters import ParameterBlock, ParameterSpace
 from synth.models.graph import AttributeGraph
 from synth.models.spec import WORLD, Uncertainty
-from synth.models.world import World
-from synth.strategies.approach import hole_frame_offset
+from synth.models.world import MatchError, World
 from synth.strategies.context import PlanContext
 from synth.strategies.grasp import EXACT
 from synth.strategies.records import Grasp
@@ -56,6 +55,11 @@ class SpaceBuilder:
     def space(self) -> ParameterSpace:
         """The space of every block registered so far."""
         return ParameterSpace(tuple(self.blocks))
+
+
+def hole_frame_offset(phi: float, offset: tuple[float, float, float]) -> pin.SE3:
+    """``trans(rot(ẑ, φ), offset)``: a frame in the hole frame [rad, m]."""
+    return pin.SE3(pin.exp3(np.array([0.0, 0.0, phi])), np.array(offset, dtype=float))
 
 
 def box_block(owner: str, bounds: tuple[tuple[str, float, float], ...]) -> ParameterBlock:
@@ -131,14 +135,29 @@ def hand_for_end(ctx: PlanContext, world: World, transform_world_end: pin.SE3) -
     return transform_world_end * ctx.transform_pin_end.inverse() * grasp.pin_from_hand()
 
 
+def approach_standoff(ctx: PlanContext, world: World) -> float:
+    """The approach height [m] of ``world``'s candidate.
+
+    Its ``("approach-standoff", pin, hole)`` fact (:mod:`synth.strategies.approach` derives it
+    from Δz), else the option's.
+    """
+    try:
+        value = world.value("approach-standoff", ctx.pin_al, ctx.hole_al)
+    except MatchError:
+        return ctx.options.standoff
+    assert isinstance(value, int | float)
+    return float(value)
+
+
 def approach_relation(ctx: PlanContext, world: World, phi: float) -> ErrorChain:
     """``hole⁻¹ ∘ end`` with the pin at the approach point (seed §4.5, L2203).
 
-    The approach point is ``hole ∘ trans(rot(ẑ, φ), (0, 0, standoff))``.
+    The approach point is ``hole ∘ trans(rot(ẑ, φ), (0, 0, standoff))``, with the candidate's
+    standoff (:func:`approach_standoff`).
     """
     builder = SpaceBuilder()
     terms = frame_inverse_terms(ctx.graph, ctx.hole_frame, builder)
-    end = ctx.world_hole * hole_frame_offset(phi, (0.0, 0.0, ctx.options.standoff))
+    end = ctx.world_hole * hole_frame_offset(phi, (0.0, 0.0, approach_standoff(ctx, world)))
     terms += held_end_terms(ctx, world, hand_for_end(ctx, world, end), builder, "hand:approach")
     return ErrorChain(builder.space(), tuple(terms))
 
@@ -190,7 +209,8 @@ def tap_relations(
     """
     builder = SpaceBuilder()
     hole_terms = frame_inverse_terms(ctx.graph, ctx.hole_frame, builder)
-    end_approach = ctx.world_hole * hole_frame_offset(phi, (0.0, 0.0, ctx.options.standoff))
+    standoff = approach_standoff(ctx, world)
+    end_approach = ctx.world_hole * hole_frame_offset(phi, (0.0, 0.0, standoff))
     insertion = hole_terms + held_end_terms(
         ctx, world, hand_for_end(ctx, world, end_approach), builder, "hand:approach"
     )

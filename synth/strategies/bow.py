@@ -1,0 +1,138 @@
+"""The path bow of a joint-interpolated approach, and via points along the axis that bound it.
+
+AL moves are joint-interpolated (seed L3846): between two targets the arm moves along the
+straight joint-space segment between their arm solutions, so the hand runs along a curve, not
+the straight line between them. For the final approach of the first attempt (the pin end from
+``hole ∘ trans(rot(ẑ, φ), (0, 0, standoff))`` down to ``(0, 0, −dtry)``) the curve bows off the
+hole axis: on the Stanford arm of seed_4_8 by about 1.3 mm with every error at zero, more than a
+precision fit's lead.
+
+The bow is measured on the arm model, never assumed: for the end point ``p(s)`` of the pin,
+
+    p(s) = T_hole⁻¹ · FK(q_k + s·(q_(k+1) − q_k)) · T_hand_end · 0,   s ∈ [0, 1],
+
+its lateral distance from the axis, ``b(s) = √(p_x² + p_y²)`` [m], is sampled on every segment
+of the approach while the end is above the seated depth (``p_z ≥ −d_f``), and the bow is the
+largest sample plus half the longest chord between consecutive samples (b is 1-Lipschitz in p,
+and a point between two samples is within half a chord of one of them, to first order in the
+curvature). Via points at equal height steps along the axis (each solved nearest the one
+before it, the replay's rule) cut the segments: a segment's bow shrinks with the square of its
+length, so a few vias bound it. :func:`plan_axis_path` picks the fewest that bring the bow
+within ``tolerance``; the bow that remains is added to the footprint
+(:mod:`synth.strategies.refine`).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+from numpy.typing import NDArray
+
+from synth.models.arm import Arm
+
+__all__ = [
+    "BOW_FRACTION",
+    "MAX_VIAS",
+    "SAMPLES",
+    "AxisPath",
+    "axis_heights",
+    "path_bow",
+    "plan_axis_path",
+]
+
+BOW_FRACTION = 0.1
+"""The bow is bounded by this fraction of the parts' geometric lead (or Δr_ok if smaller)."""
+MAX_VIAS = 8
+"""At most this many via points between the approach point and the target."""
+SAMPLES = 48
+"""Samples per joint-space segment [1]."""
+
+Configuration = NDArray[np.float64]
+
+
+def axis_heights(standoff: float, dtry: float, vias: int) -> tuple[float, ...]:
+    """Heights [m] of the end along the axis: standoff, ``vias`` equal steps, then −dtry."""
+    span = standoff + dtry
+    return tuple(standoff - k * span / (vias + 1) for k in range(vias + 2))
+
+
+def path_bow(
+    arm: Arm,
+    configurations: Sequence[Configuration],
+    transform_hole_world: pin.SE3,
+    transform_hand_end: pin.SE3,
+    floor: float,
+    samples: int = SAMPLES,
+) -> float:
+    """The bow [m] of the joint-space polyline through ``configurations`` (module docstring).
+
+    Only points with the end at or above ``floor`` [m] (hole frame z, −d_f) count.
+    """
+    worst = 0.0
+    for q0, q1 in itertools.pairwise(configurations):
+        delta = np.asarray(q1) - np.asarray(q0)
+        for s in np.linspace(0.0, 1.0, samples + 1):
+            end = transform_hole_world * arm.forward(q0 + s * delta) * transform_hand_end
+            p = np.asarray(end.translation, dtype=float)
+            if p[2] >= floor:
+                worst = max(worst, math.hypot(float(p[0]), float(p[1])))
+    return worst
+
+
+@dataclass(frozen=True, eq=False)
+class AxisPath:
+    """The final approach along the hole axis.
+
+    ``heights`` [m] of the end (approach, vias, target), the arm's ``configurations`` there and
+    the measured ``bow`` [m].
+    """
+
+    heights: tuple[float, ...]
+    configurations: tuple[Configuration, ...]
+    bow: float
+
+    @property
+    def via_heights(self) -> tuple[float, ...]:
+        """Heights [m] of the via points between the approach point and the target."""
+        return self.heights[1:-1]
+
+
+def plan_axis_path(
+    solve: Callable[[float, Configuration], Configuration | None],
+    arm: Arm,
+    q_approach: Configuration,
+    transform_hole_world: pin.SE3,
+    transform_hand_end: pin.SE3,
+    standoff: float,
+    dtry: float,
+    d_f: float,
+    tolerance: float,
+) -> AxisPath | None:
+    """The fewest vias (0…:data:`MAX_VIAS`) whose path bows at most ``tolerance`` [m].
+
+    ``solve(z, q)`` is the arm solution with the end at height ``z`` on the axis, nearest ``q``
+    (None: unreachable). Returns the path with the smallest bow if none is within tolerance,
+    None if no height has an arm solution.
+    """
+    best: AxisPath | None = None
+    for vias in range(MAX_VIAS + 1):
+        heights = axis_heights(standoff, dtry, vias)
+        path: list[Configuration] = [q_approach]
+        for z in heights[1:]:
+            q = solve(z, path[-1])
+            if q is None:
+                break
+            path.append(q)
+        else:
+            bow = path_bow(arm, path, transform_hole_world, transform_hand_end, -d_f)
+            made = AxisPath(heights, tuple(path), bow)
+            if best is None or bow < best.bow:
+                best = made
+            if bow <= tolerance:
+                return made
+    return best
