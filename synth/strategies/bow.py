@@ -56,9 +56,13 @@ Configuration = NDArray[np.float64]
 
 
 def axis_heights(standoff: float, dtry: float, vias: int) -> tuple[float, ...]:
-    """Heights [m] of the end along the axis: standoff, ``vias`` equal steps, then −dtry."""
-    span = standoff + dtry
-    return tuple(standoff - k * span / (vias + 1) for k in range(vias + 2))
+    """Heights [m] of the end along the axis: standoff, ``vias`` equal steps, then −dtry.
+
+    The vias' heights are rounded to 0.1 mm, so that the program prints them exactly.
+    """
+    step = (standoff + dtry) / (vias + 1)
+    inner = tuple(round(standoff - k * step, 4) for k in range(1, vias + 1))
+    return (standoff, *inner, -dtry)
 
 
 def path_bow(
