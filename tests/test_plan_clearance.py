@@ -104,7 +104,8 @@ def test_box_margin_bounds_every_sampled_displacement_of_its_corners() -> None:
     # 20 000 uniform errors (the extreme points of a box are its corners).
     spec = load_task(FIXTURES / "seed_4_8.yaml")
     ctx = build_context(spec)
-    margin = ctx.gross.empty.margins["BOX"]
+    displacement = ctx.gross.empty.displacements["BOX"]
+    margin = displacement.bound()
     t_max = math.hypot(0.3 * 0.0254, 0.2 * 0.0254)
     radius = math.hypot(4.45, 3.80, 4.90 / 2) * 0.01 + 4.90 / 2 * 0.01  # |aabb centre| + ρ
     assert margin == pytest.approx(t_max + math.radians(5) * radius, rel=1e-9)
@@ -121,6 +122,13 @@ def test_box_margin_bounds_every_sampled_displacement_of_its_corners() -> None:
     # The ball's radius counts the height the z rotation cannot move: the margin exceeds the
     # sampled worst by that, 5°·(8.79 − 5.85) cm ≈ 0.26 cm, and no more than 0.3 cm.
     assert margin - worst < 0.003
+    # Per direction (SweepOptions.displacements): the sampled corner displacements along n never
+    # exceed the support D(n); no error of the block moves it vertically, so D(ẑ) = 0.
+    for n in ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.6, 0.8, 0.0]):
+        along = n[0] * (moved_x - corners[:, 0]) + n[1] * (moved_y - corners[:, 1])
+        support = displacement.support(np.array(n))
+        assert float(np.max(np.abs(along))) <= support <= margin
+    assert displacement.support(np.array([0.0, 0.0, 1.0])) == pytest.approx(0.0, abs=1e-15)
 
 
 def test_with_margins_no_sampled_world_hits_the_box_on_the_gross_motions(old_base) -> None:

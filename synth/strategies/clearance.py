@@ -19,27 +19,35 @@ solved nearest the configuration before it, from the park on
    grasp, fingers closed on it, the same solids without the pin.
 
 The believed workcell is not the true one, so each pair must keep the 1 mm clearance plus how
-far either body may be from its believed place (``SweepOptions.margins``):
+far either body may be from its believed place:
 
-* a solid under uncertain links L (its own, or its ancestors'): Σ_L (|t|_max + θ_max·r_L), with
-  |t|_max the norm of the link's translation bounds, θ_max = |rx| + |ry| + |rz| (the angle of a
-  product of rotations is at most the sum of theirs; a point at r moves 2 sin(θ/2)·r ≤ θ·r) and
-  r_L the radius about L's origin of a ball holding the solid. The sum is exact as a bound: each
-  link's error moves the subtree rigidly, so displacements add by the triangle inequality;
+* a solid under uncertain links L (its own, or its ancestors'): a directional bound
+  (:class:`~synth.models.arm.sweep.Displacement`, ``SweepOptions.displacements``): along the
+  direction n between the closest points, Σ_L (Σ_i |n_i|·t_i + Σ_i √(1 − n_i²)·2 sin(θ_i/2)·r_L)
+  with n in L's frame, t_i and θ_i the link's bounds per axis and r_L the radius about L's
+  origin of a ball holding the solid. A part with sideways errors and an exact height has no
+  vertical margin; the ball bound Σ_L (|t|_max + Σθ_i·r_L) applies only where the direction is
+  unknown. The sum is exact as a bound: each link's error moves the subtree rigidly;
 * the hand and what it carries, and the wrist bodies (the last three joints), under the arm's
   positioning error (``manipulator.hand_error``, applied in the hand frame): |t|_max + θ_max·r
   with r about the hand origin (taken at the park configuration: wrist bodies turn about the
-  wrist centre, which changes r by centimetres and the margin by θ_max·Δr < 1 mm).
+  wrist centre, which changes r by centimetres and the margin by θ_max·Δr < 1 mm), a ball
+  (``SweepOptions.margins``);
+* the arm's own bodies and the held pin move together under one hand error, so a pair of them
+  keeps the clearance only (``SweepOptions.rigid``).
 
-Seed_4_8 gives BOX a margin of 1.68 cm (0.3 in, 0.2 in, 5° at the 8.8 cm of its bounding ball),
-the fingers 0.29 cm and the wrist 0.5–0.64 cm: without them the planner's program for seed_4_8
-at the arm's first base, (20, 80) cm, left the box 1 mm and hit it with wrist_body in 56 of 300
-sampled worlds.
+Seed_4_8 gives BOX a ball bound of 1.68 cm (0.3 in, 0.2 in, 5° at the 8.8 cm of its bounding
+ball), the fingers 0.29 cm and the wrist 0.5–0.64 cm: without them the planner's program for
+seed_4_8 at the arm's first base, (20, 80) cm, left the box 1 mm and hit it with wrist_body in
+56 of 300 sampled worlds.
 
-A candidate whose gross motion comes closer than that to a solid is rejected, the bodies named.
-The fine motions (approach → grasp → departure at the start hole, approach → hole with its
-guarded insertion, search and tap moves) stay with the seed's geometric conditions and with the
-replay, which sweeps every motion and decides every contact.
+A candidate whose gross motion comes closer than that to a solid is rejected, the bodies named,
+with the closest distance the pair reaches along the motion and the distance it needs.
+
+The fine motions at the target hole (:mod:`synth.strategies.fine`) use :meth:`fine` and
+:meth:`letting_go`: there the hand follows the target part (the pin touches it or sits in
+it), so the part and the hand keep the clearance only, the other solids their own margins, and
+the pin may touch the part (its tip enters the hole or lands on the surface).
 """
 
 from __future__ import annotations
@@ -63,12 +71,19 @@ from synth.models.arm import (
     swept_path,
 )
 from synth.models.arm.bodies import bounding_radius
+from synth.models.arm.sweep import Displacement, LinkDisplacement
 from synth.models.graph import AttributeGraph
 from synth.models.spec import Uncertainty
 from synth.models.workcell import NominalPoses, PinModel, WorkcellModel
 from synth.strategies.records import Grasp
 
-__all__ = ["GrossMotionCheck", "link_margin", "solid_margin"]
+__all__ = [
+    "GrossMotionCheck",
+    "link_displacement",
+    "link_margin",
+    "solid_displacement",
+    "solid_margin",
+]
 
 
 def link_margin(block: Uncertainty, radius: float) -> float:
@@ -84,21 +99,54 @@ def link_margin(block: Uncertainty, radius: float) -> float:
     return translation + angle * radius
 
 
-def solid_margin(graph: AttributeGraph, frame: str, geometry: coal.CollisionGeometry) -> float:
-    """How far [m] any point of ``frame``'s solid may be from its believed place.
+def link_displacement(
+    block: Uncertainty, rotation: NDArray[np.float64], radius: float
+) -> LinkDisplacement:
+    """The directional displacement bound of a link's error block (link frame ``rotation``)."""
+    bounds = block.bounds()
 
-    Σ over the uncertain links L on the way from the world to ``frame`` (itself included) of
-    :func:`link_margin` at the radius about L's origin of the solid's bounding ball.
+    def extreme(name: str) -> float:
+        b = bounds.get(name)
+        return 0.0 if b is None else max(abs(b.lo), abs(b.hi))
+
+    return LinkDisplacement(
+        rotation=np.array(rotation, dtype=float),
+        translation=np.array([extreme(n) for n in ("x", "y", "z")]),
+        angles=np.array([extreme(n) for n in ("rx", "ry", "rz")]),
+        radius=radius,
+    )
+
+
+def solid_displacement(
+    graph: AttributeGraph, frame: str, geometry: coal.CollisionGeometry
+) -> Displacement:
+    """How far any point of ``frame``'s solid may be from its believed place, per direction.
+
+    One :func:`link_displacement` per uncertain link L on the way from the world to ``frame``
+    (itself included), at the radius about L's origin of the solid's bounding ball.
     """
     world_solid = graph.world_from(frame)
-    total = 0.0
+    links = []
     for name in graph.ancestors(frame)[:-1]:  # without the world
         block = graph.links[name].uncertainty
         if block is None or not block.bounds():
             continue
-        placed = graph.world_from(name).actInv(world_solid)
-        total += link_margin(block, bounding_radius(geometry, placed))
-    return total
+        world_link = graph.world_from(name)
+        radius = bounding_radius(geometry, world_link.actInv(world_solid))
+        links.append(link_displacement(block, world_link.rotation, radius))
+    return Displacement(tuple(links))
+
+
+def solid_margin(graph: AttributeGraph, frame: str, geometry: coal.CollisionGeometry) -> float:
+    """How far [m] any point of ``frame``'s solid may be from its believed place (any direction).
+
+    The ball bound of :func:`solid_displacement`: Σ_L |t|_max + θ_max·r_L.
+    """
+    return solid_displacement(graph, frame, geometry).bound()
+
+
+CLOSEST_SAMPLES = 24
+"""Samples of the rest of the segment where a sweep stopped, for the closest distance [1]."""
 
 
 @dataclass(eq=False)
@@ -119,6 +167,8 @@ class GrossMotionCheck:
     pin_standing: Obstacle
     empty: SweepOptions = field(default_factory=SweepOptions)
     carrying: SweepOptions = field(default_factory=SweepOptions)
+    fine_motion: SweepOptions = field(default_factory=SweepOptions)
+    solid_frames: dict[str, str] = field(default_factory=dict)
     _scenes: dict[tuple[object, ...], CollisionScene] = field(default_factory=dict)
 
     @staticmethod
@@ -139,11 +189,13 @@ class GrossMotionCheck:
         carried = model.pins[pin_frame]
         pin_standing = model.pin_obstacle(pin_frame, graph.world_from(pin_frame))
         frames = {graph.al_names[name]: name for name in graph.nodes}
-        solids: dict[str, float] = {}
+        solids: dict[str, Displacement] = {}
+        solid_frames: dict[str, str] = {}
         for obstacle in workcell.obstacles:
             frame = frames.get(obstacle.name)
             if frame is not None:
-                solids[obstacle.name] = solid_margin(graph, frame, obstacle.geometry)
+                solid_frames[obstacle.name] = frame
+                solids[obstacle.name] = solid_displacement(graph, frame, obstacle.geometry)
         moving: dict[str, float] = {}  # the arm's bodies near the hand, and the held pin
         if hand_error is not None:
             probe = CollisionScene(
@@ -158,16 +210,65 @@ class GrossMotionCheck:
                     placed = hand.actInv(probe.body_pose(q_reference, body.name))
                     radius = bounding_radius(body.geometry, placed)
                     moving[body.name] = link_margin(hand_error, radius)
-        standing = solid_margin(graph, pin_frame, pin_standing.geometry)
+        standing = solid_displacement(graph, pin_frame, pin_standing.geometry)
         arm_only = {name: m for name, m in moving.items() if name != carried.name}
+        rigid = frozenset([*(b.name for b in arm.bodies), carried.name])
         return GrossMotionCheck(
             arm,
             workcell.obstacles,
             carried,
             pin_standing,
-            empty=SweepOptions(margins={**solids, **arm_only, carried.name: standing}),
-            carrying=SweepOptions(margins={**solids, **moving}),
+            empty=SweepOptions(
+                margins=arm_only,
+                displacements={**solids, carried.name: standing},
+                rigid=rigid - {carried.name},
+            ),
+            carrying=SweepOptions(margins=moving, displacements=solids, rigid=rigid),
+            fine_motion=SweepOptions(displacements=solids, rigid=rigid),
+            solid_frames=solid_frames,
         )
+
+    def part_of(self, graph: AttributeGraph, frame: str) -> str | None:
+        """The solid (AL name) ``frame`` belongs to: itself or its nearest ancestor with one."""
+        by_frame = {f: name for name, f in self.solid_frames.items()}
+        for name in graph.ancestors(frame):
+            if name in by_frame:
+                return by_frame[name]
+        return None
+
+    def fine_options(self, part: str | None) -> SweepOptions:
+        """Fine motions at ``part``: the part without a margin (the hand follows it)."""
+        if part is None:
+            return self.fine_motion
+        displacements = {k: v for k, v in self.fine_motion.displacements.items() if k != part}
+        return SweepOptions(displacements=displacements, rigid=self.fine_motion.rigid)
+
+    def fine(self, grasp: Grasp, part: str | None) -> CollisionScene:
+        """The arm holding the pin by ``grasp`` near the target ``part`` (the pin may touch it)."""
+        holding = self.holding(grasp)
+        key: tuple[object, ...] = ("fine", part, id(holding))
+        scene = self._scenes.get(key)
+        if scene is None:
+            allowed = [*holding.allowed]
+            if part is not None:
+                allowed.append(frozenset((self.carried.name, part)))
+            scene = holding.with_held(holding.held, allowed)
+            self._scenes[key] = scene
+        return scene
+
+    def letting_go(self, opening: float, seated: pin.SE3, part: str | None) -> CollisionScene:
+        """The empty hand at ``opening`` with the pin seated at ``seated`` (world) in ``part``."""
+        key = ("let go", round(opening, 9), tuple(np.round(seated.homogeneous, 9).reshape(-1)))
+        scene = self._scenes.get(key)
+        if scene is None:
+            standing = Obstacle(self.carried.name, self.carried.geometry, seated)
+            scene = CollisionScene(
+                self.arm,
+                (*self.solids, standing),
+                opening=min(opening, self._max_opening),
+            )
+            self._scenes[key] = scene
+        return scene
 
     def options_for(self, scene: CollisionScene) -> SweepOptions:
         """The margins of ``scene``: holding the pin, or with the pin standing in the cell."""
@@ -205,20 +306,41 @@ class GrossMotionCheck:
         return self.arm.hand.max_opening
 
     def obstruction(
-        self, scene: CollisionScene, waypoints: Sequence[NDArray[np.float64]], motion: str
+        self,
+        scene: CollisionScene,
+        waypoints: Sequence[NDArray[np.float64]],
+        motion: str,
+        options: SweepOptions | None = None,
     ) -> str | None:
-        """Why the joint-space path through ``waypoints`` is not clear, or None when it is."""
-        options = self.options_for(scene)
-        result = swept_path(scene, list(waypoints), options)
+        """Why the joint-space path through ``waypoints`` is not clear, or None when it is.
+
+        The reason names the pair, the closest it comes along the motion (sampled from where
+        the sweep stopped to the end of that segment) and the distance it needs there: the
+        clearance plus both bodies' margins along their closest points' direction.
+        """
+        options = options or self.options_for(scene)
+        points = [np.asarray(w, dtype=float) for w in waypoints]
+        result = swept_path(scene, points, options)
         if result.free:
             return None
-        a, b = result.pair if result.pair is not None else ("?", "?")
+        pair = result.pair if result.pair is not None else ("?", "?")
+        closest, q_closest = result.distance, result.q
+        if pair in scene.pairs and len(points) > 1:
+            k = scene.pairs.index(pair)
+            i = min(int(result.s), len(points) - 2)
+            for u in np.linspace(result.s - i, 1.0, CLOSEST_SAMPLES):
+                q = points[i] + u * (points[i + 1] - points[i])
+                d = float(scene.distances(q)[k])
+                if d < closest:
+                    closest, q_closest = d, q
+        a, b = pair
         if a in {o.name for o in scene.environment}:
             a, b = b, a
-        required = float(options.required([(a, b)])[0])
-        x, y, z = (100.0 * float(v) for v in self.arm.forward(result.q).translation)
+        required = result.required if result.required > 0 else float(options.required([pair])[0])
+        x, y, z = (100.0 * float(v) for v in self.arm.forward(q_closest).translation)
+        where = "touch" if closest <= 0 else f"come {100 * closest:.2f} cm apart"
         return (
-            f"the {motion} sweeps {a} into {b} ({100 * result.distance:.2f} cm apart where "
-            f"{100 * required:.2f} cm are needed for their uncertainty, hand at ({x:.2f}, "
-            f"{y:.2f}, {z:.2f}) cm; AL moves are joint-interpolated)"
+            f"the {motion} sweeps {a} into {b} (they {where}; {100 * required:.2f} cm are "
+            f"needed: {100 * options.clearance:.2f} cm clearance and their uncertainty; hand "
+            f"at ({x:.2f}, {y:.2f}, {z:.2f}) cm; AL moves are joint-interpolated)"
         )

@@ -13,7 +13,9 @@ For one basic strategy, in its own world:
    rejects;
 5. in the plane (§4.5.3): ``Δr = max(Δx, Δy) > Δr_ok`` asks for a search
    (:mod:`synth.strategies.search`);
-6. ``finetime`` = tap time + search time; the success test's threshold is ``Δz/τ`` with the
+6. the fine motions (insertion, search points, tap, let-go, get-clear) must be clear of the
+   workcell (:mod:`synth.strategies.fine`);
+7. ``finetime`` = tap time + search time; the success test's threshold is ``Δz/τ`` with the
    tap-corrected Δz (the programs of §4.8 test ``|DISTANCE_OFF| > .169`` = .127/.75, L2738,
    and ``> .239`` ≈ .180/.75, L2836).
 
@@ -31,6 +33,7 @@ from synth.errors.estimate import RelationModel
 from synth.models.world import World
 from synth.strategies.approach import Candidate
 from synth.strategies.context import PlanContext
+from synth.strategies.fine import fine_motion_obstruction
 from synth.strategies.footprint import estimate_footprint, footprint_tables
 from synth.strategies.records import PinInHoleStrategy, Rejection
 from synth.strategies.relations import approach_relation, hole_only_relation
@@ -157,6 +160,9 @@ def refine(ctx: PlanContext, cand: Candidate) -> Refined | Rejection:
         success_threshold=dz / opts.tau,
         decisions=tuple(decisions),
     )
+    obstructed = fine_motion_obstruction(ctx, cand, strategy)
+    if obstructed is not None:
+        return Rejection(cand.name, obstructed)
     return Refined(strategy, world, cand)
 
 

@@ -324,6 +324,7 @@ class CollisionScene:
         n = len(self.pairs)
         d = np.fromiter((results[k].min_distance for k in range(n)), float, n)
         recheck = np.flatnonzero((d <= exact_below) & ~self._bound_is_exact)
+        self._exact_last = set(recheck.tolist())
         if recheck.size:
             pin.updateGeometryPlacements(
                 self.model, self.data, self.geometry_model, self.geometry_data
@@ -333,6 +334,18 @@ class CollisionScene:
                 pin.computeDistance(self.geometry_model, self.geometry_data, int(k))
                 d[k] = exact[int(k)].min_distance
         return d
+
+    def normal(self, k: int) -> NDArray[np.float64]:
+        """Unit direction between the closest points of pair ``k`` [1] (zero: none known).
+
+        From the last :meth:`distance_bounds` call: the hulls', or the meshes' where it
+        rechecked them.
+        """
+        exact = k in getattr(self, "_exact_last", ())
+        results = (self.geometry_data if exact else self.bound_data).distanceResults
+        n = np.asarray(results[k].normal, dtype=float)
+        norm = float(np.linalg.norm(n))
+        return n / norm if norm > 0.0 else np.zeros(3)
 
     def clearance(self, q: ArrayLike) -> Clearance:
         """Return the smallest distance over the checked pairs and its pair (inf: none)."""

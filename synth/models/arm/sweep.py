@@ -104,6 +104,59 @@ def pair_motion_bounds(
 
 
 @dataclass(frozen=True)
+class LinkDisplacement:
+    """How far one uncertain link's error moves a solid under it, direction by direction.
+
+    The link's error is ``trans(t) ∘ rot_x(θ_x) ∘ rot_y(θ_y) ∘ rot_z(θ_z)`` in the link frame
+    (seed A.2), ``|t_i| ≤ translation_i`` [m], ``|θ_i| ≤ angles_i`` [rad]; ``rotation`` is the
+    link frame's orientation in the world and ``radius`` [m] that of a ball about the link's
+    origin holding the solid. A point p of the solid moves by δ = t + (R − I)p, and for a unit
+    direction n (link frame)
+
+        n·δ ≤ Σ_i |n_i|·translation_i + Σ_i √(1 − n_i²)·2 sin(θ_i/2)·r,
+
+    since R − I = (R_x − I)R_yR_z + (R_y − I)R_z + (R_z − I) and (R_a − I)q is perpendicular to
+    the axis a with length ≤ 2 sin(θ/2)|q| (:meth:`support`). A part with a yaw error and no
+    height error never moves vertically; the ball bound of :meth:`bound` says it moves
+    |t| + Σθ·r in every direction.
+    """
+
+    rotation: NDArray[np.float64]
+    translation: NDArray[np.float64]
+    angles: NDArray[np.float64]
+    radius: float
+
+    def support(self, direction: NDArray[np.float64]) -> float:
+        """Largest displacement [m] of a point of the solid along the world unit ``direction``."""
+        n = self.rotation.T @ direction
+        along = float(np.abs(n) @ self.translation)
+        across = np.sqrt(np.clip(1.0 - n * n, 0.0, 1.0))
+        return along + float(across @ (2.0 * np.sin(self.angles / 2.0))) * self.radius
+
+    def bound(self) -> float:
+        """Largest displacement [m] in any direction: |t|_max + Σ_i θ_i·r."""
+        return float(np.linalg.norm(self.translation)) + float(np.sum(self.angles)) * self.radius
+
+
+@dataclass(frozen=True)
+class Displacement:
+    """A solid's displacement bound: the sum over the uncertain links above it.
+
+    Each link's error moves the subtree rigidly, so displacements add.
+    """
+
+    links: tuple[LinkDisplacement, ...]
+
+    def support(self, direction: NDArray[np.float64]) -> float:
+        """Largest displacement [m] along the world unit ``direction``."""
+        return sum((link.support(direction) for link in self.links), 0.0)
+
+    def bound(self) -> float:
+        """Largest displacement [m] in any direction."""
+        return sum((link.bound() for link in self.links), 0.0)
+
+
+@dataclass(frozen=True)
 class SweepOptions:
     """Options of the swept checks."""
 
@@ -116,14 +169,59 @@ class SweepOptions:
     margins[b]`` apart. The planner puts here how far a body may be from where it is believed
     (an object's pose error, the hand's positioning error), so a path clear of the believed
     world is clear of every world the task allows."""
+    displacements: Mapping[str, Displacement] = field(default_factory=dict)
+    """Per body name, a directional displacement bound (a solid under uncertain links): a pair
+    (a, b) whose closest points lie along n must keep ``clearance + margins[a] + margins[b] +
+    D_a(n) + D_b(n)`` apart. Convex bodies separated by a slab of width d along n stay apart
+    if they move by less than d along n, so the bound need only hold along n; where n is
+    unknown the ball bound :meth:`Displacement.bound` is used."""
+    rigid: frozenset[str] = frozenset()
+    """Bodies that move together (the arm's links, the hand and the held pin under one hand
+    error): a pair of them keeps the clearance only."""
 
     def pair_margins(self, pairs: Sequence[tuple[str, str]]) -> NDArray[np.float64]:
-        """margins[a] + margins[b] [m] for each pair (0 for bodies without a margin)."""
-        m = self.margins
-        return np.array([m.get(a, 0.0) + m.get(b, 0.0) for a, b in pairs], dtype=float)
+        """The margins [m] of each pair in any direction (displacements at their ball bound).
+
+        0 for bodies without one, and for a pair of :attr:`rigid` bodies.
+        """
+        m, d, rigid = self.margins, self.displacements, self.rigid
+        out = []
+        for a, b in pairs:
+            if a in rigid and b in rigid:
+                out.append(0.0)
+                continue
+            total = m.get(a, 0.0) + m.get(b, 0.0)
+            total += sum((d[x].bound() for x in (a, b) if x in d), 0.0)
+            out.append(total)
+        return np.array(out, dtype=float)
+
+    def directional(self, pairs: Sequence[tuple[str, str]]) -> NDArray[np.int64]:
+        """Indices of the pairs with a directional displacement (not both rigid)."""
+        d, rigid = self.displacements, self.rigid
+        return np.array(
+            [
+                k
+                for k, (a, b) in enumerate(pairs)
+                if (a in d or b in d) and not (a in rigid and b in rigid)
+            ],
+            dtype=np.int64,
+        )
+
+    def pair_margin_along(self, pair: tuple[str, str], direction: NDArray[np.float64]) -> float:
+        """The margin [m] of ``pair`` whose closest points lie along the unit ``direction``."""
+        a, b = pair
+        if a in self.rigid and b in self.rigid:
+            return 0.0
+        if not np.any(direction):
+            return float(self.pair_margins([pair])[0])
+        total = self.margins.get(a, 0.0) + self.margins.get(b, 0.0)
+        for x in (a, b):
+            if x in self.displacements:
+                total += self.displacements[x].support(direction)
+        return total
 
     def required(self, pairs: Sequence[tuple[str, str]]) -> NDArray[np.float64]:
-        """The distance [m] each pair must keep: the clearance plus both bodies' margins."""
+        """The distance [m] each pair must keep in any direction: clearance plus margins."""
         return self.clearance + self.pair_margins(pairs)
 
 
@@ -143,6 +241,9 @@ class SweepResult:
     pair: tuple[str, str] | None
     distance: float
     checks: int
+    required: float = 0.0
+    """[m] the distance ``pair`` had to keep there (clearance and margins along its
+    direction)."""
 
 
 def _advance(
@@ -155,6 +256,7 @@ def _advance(
     """Conservative advancement over s ∈ [0, end]: q = position(s), |dq_j/ds| ≤ rates_j."""
     bounds = scene.pair_bounds @ rates  # M per pair [m per unit s]
     margins = options.pair_margins(scene.pairs)
+    directional = options.directional(scene.pairs)
     s, checks = 0.0, 0
     while True:
         q = position(s)
@@ -164,14 +266,22 @@ def _advance(
         checks += 1
         # The margins play the bodies' own surfaces: a step of gap/M cannot bring a pair inside
         # its margins, and a gap ≤ clearance stops the check (so every step is ≥ clearance/M).
+        # A pair with a directional displacement keeps its margin along its closest points'
+        # direction (SweepOptions.displacements), never more than the ball bound.
         gap = d - margins
+        if directional.size:
+            near = directional[gap[directional] <= options.clearance + margins[directional]]
+            for j in near.tolist():
+                along = options.pair_margin_along(scene.pairs[j], scene.normal(j))
+                gap[j] = d[j] - min(along, float(margins[j]))
         k = int(np.argmin(gap))
+        need = float(d[k] - gap[k]) + options.clearance
         if gap[k] <= options.clearance:
-            return SweepResult(False, s, q, scene.pairs[k], float(d[k]), checks)
+            return SweepResult(False, s, q, scene.pairs[k], float(d[k]), checks, need)
         if s >= end:
-            return SweepResult(True, end, q, scene.pairs[k], float(d[k]), checks)
+            return SweepResult(True, end, q, scene.pairs[k], float(d[k]), checks, need)
         if checks >= options.max_checks:
-            return SweepResult(False, s, q, scene.pairs[k], float(d[k]), checks)
+            return SweepResult(False, s, q, scene.pairs[k], float(d[k]), checks, need)
         moving = bounds > 0
         step = float(np.min(gap[moving] / bounds[moving])) if np.any(moving) else end - s
         s = min(end, s + step)
@@ -198,7 +308,9 @@ def swept_path(
         result = swept_segment(scene, points[i], points[i + 1], opts)
         total += result.checks
         if not result.free:
-            return SweepResult(False, i + result.s, result.q, result.pair, result.distance, total)
+            return SweepResult(
+                False, i + result.s, result.q, result.pair, result.distance, total, result.required
+            )
         last = result
     if last is None:
         c = scene.clearance(points[0])
