@@ -1,0 +1,132 @@
+"""Fine motions and per-direction margins: the planner's world matches the replay's near the hole.
+
+* a 4 cm dowel into a 2 cm plate: held at γ = 100°, the palm is inside the plate at the seat
+  (checked here on a fresh Coal scene, independently of the planner's sweep); the planner must
+  reject those candidates naming the palm and the plate, and take a hand-down grasp;
+* a block ±0.5 in, ±3° sideways with an exact height: no error moves its top up, so the pin
+  1 in above it is clear (the ball margin, 2.68 cm, refused every candidate);
+* the arm's own bodies and the held pin keep no margins against each other.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from synth.codegen.emitter import emit_program
+from synth.errors.locate import believed_graph
+from synth.models.arm import CollisionScene, nearest_solution
+from synth.models.loader import load_task
+from synth.models.workcell import NominalPoses, WorkcellModel
+from synth.replay.run import replay
+from synth.strategies.context import build_context
+from synth.strategies.planner import plan_task
+from synth.strategies.records import Grasp
+
+TASKS = Path(__file__).resolve().parent / "data" / "tasks"
+DOWEL = TASKS / "short_dowel_plate.yaml"
+SIDEWAYS = TASKS / "sideways_error.yaml"
+DEG = math.pi / 180
+CM = 0.01
+
+
+@pytest.fixture(scope="module")
+def dowel():
+    spec = load_task(DOWEL)
+    return spec, plan_task(spec)
+
+
+def test_palm_is_inside_the_plate_at_a_gamma_100_seat() -> None:
+    # The oracle: ω = 180°, γ = 100°, d = 3.00 cm (the grasp the planner chose before fine
+    # motions were swept), the pin seated 1.5 cm deep at φ = 45°: the hand's origin is then
+    # d − d_f = 1.5 cm above the plate along a pin axis 10° from the hand's approach, and the
+    # palm reaches below the plate's top. Distance on a scene of the arm and the plate alone.
+    spec = load_task(DOWEL)
+    ctx = build_context(spec)
+    grasp = Grasp(180 * DEG, 100 * DEG, 3.00 * CM)
+    seat = pin.SE3(pin.exp3(np.array([0.0, 0.0, 45 * DEG])), np.array([0.0, 0.0, -1.5 * CM]))
+    hand = ctx.world_hole * seat * grasp.pin_from_hand()
+    q = nearest_solution(ctx.arm, ctx.arm.inverse(hand, hint=ctx.q_park), ctx.q_park)
+    assert q is not None
+    model = WorkcellModel(ctx.graph, [ctx.arm.transform_world_base.translation])
+    plate = [o for o in model.place(NominalPoses(ctx.graph)).obstacles if o.name == "PLATE"]
+    scene = CollisionScene(ctx.arm, plate, opening=ctx.pin_shape.diameter)
+    distances = dict(zip(scene.pairs, scene.distances(q), strict=True))
+    assert distances[("palm", "PLATE")] <= 0.0
+
+
+def test_fine_motions_reject_the_palm_in_the_plate_and_keep_hand_down(dowel) -> None:
+    _, result = dowel
+    grasp = result.strategy.pickup.grasp
+    assert grasp.gamma == pytest.approx(180 * DEG)
+    palm = [r for r in result.rejected if "γ=100°" in r.candidate and "palm into PLATE" in r.reason]
+    assert palm, [r.reason for r in result.rejected]
+    assert all("needed" in r.reason and r.kind == "collision" for r in palm)
+
+
+def test_dowel_program_succeeds_nominally_and_in_sampled_worlds(dowel) -> None:
+    # Before: the γ = 100° program seated 8 of 10 sampled worlds (the palm on the plate).
+    spec, result = dowel
+    report = replay(emit_program(result.strategy, believed_graph(spec)), DOWEL, trials=10, seed=0)
+    assert report.nominal.outcome == "success", report.nominal.message
+    assert report.monte_carlo.outcomes == {"success": 10}
+
+
+def test_sideways_error_has_no_vertical_margin_and_plans() -> None:
+    spec = load_task(SIDEWAYS)
+    ctx = build_context(spec)
+    block = ctx.gross.carrying.displacements["BLOCK"]
+    # Ball bound: |t| = √2·0.5 in plus 3° at the block's bounding radius (the 20 × 20 × 4.9 cm
+    # box's ball about its origin at the bottom face: |AABB centre| + half-diagonal).
+    radius = 2.45 * CM + math.hypot(10, 10, 2.45) * CM
+    ball = math.hypot(0.5, 0.5) * 2.54 * CM + 3 * DEG * radius
+    assert block.bound() == pytest.approx(ball, rel=1e-9)
+    assert ball > 2.54 * CM  # more than the approach height: every candidate was refused
+    assert block.support(np.array([0.0, 0.0, 1.0])) == pytest.approx(0.0, abs=1e-15)
+    # Sideways, the support is the x error plus the chord of 3° at the radius (n ⟂ z).
+    chord = 2 * math.sin(1.5 * DEG) * radius
+    assert block.support(np.array([1.0, 0.0, 0.0])) == pytest.approx(0.5 * 2.54 * CM + chord)
+    result = plan_task(spec)
+    assert result.strategy.search is not None
+    program = emit_program(result.strategy, believed_graph(spec))
+    report = replay(program, SIDEWAYS, trials=10, seed=0)
+    assert report.nominal.outcome == "success", report.nominal.message
+    assert report.monte_carlo.outcomes == {"success": 10}
+
+
+def test_sampled_displacements_stay_within_the_directional_support() -> None:
+    # Exact nonlinear chain: points of the block moved by trans(t)∘rot_z(θ) (its error block),
+    # projected on random directions, never exceed D(n), and come within 2 % of it.
+    spec = load_task(SIDEWAYS)
+    ctx = build_context(spec)
+    block = ctx.gross.carrying.displacements["BLOCK"]
+    rng = np.random.default_rng(0)
+    corners = np.array(
+        [[sx * 0.10, sy * 0.10, z] for sx in (-1, 1) for sy in (-1, 1) for z in (0.0, 0.049)]
+    )
+    t = rng.uniform(-0.0127, 0.0127, (4000, 2))
+    theta = rng.uniform(-3 * DEG, 3 * DEG, 4000)
+    c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
+    dx = t[:, :1] + (c - 1) * corners[:, 0] - s * corners[:, 1]
+    dy = t[:, 1:] + s * corners[:, 0] + (c - 1) * corners[:, 1]
+    for _ in range(20):
+        n = rng.normal(size=3)
+        n /= np.linalg.norm(n)
+        worst = float(np.max(np.abs(n[0] * dx + n[1] * dy)))
+        support = block.support(n)
+        assert worst <= support + 1e-12
+    assert block.support(np.array([0.0, 0.0, 1.0])) == 0.0
+
+
+def test_the_arm_and_the_held_pin_keep_no_margin_against_each_other() -> None:
+    ctx = build_context(load_task(SIDEWAYS))
+    carrying = ctx.gross.carrying
+    margins = carrying.pair_margins([("wrist_roll", "palm"), ("boom", "PIN1"), ("palm", "BLOCK")])
+    assert margins[0] == 0.0 and margins[1] == 0.0
+    assert margins[2] == pytest.approx(
+        carrying.margins["palm"] + carrying.displacements["BLOCK"].bound()
+    )
