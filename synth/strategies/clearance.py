@@ -145,6 +145,14 @@ def solid_margin(graph: AttributeGraph, frame: str, geometry: coal.CollisionGeom
     return solid_displacement(graph, frame, geometry).bound()
 
 
+def _pair_distance(scene: CollisionScene, q: NDArray[np.float64], k: int) -> float:
+    """Distance [m] of the scene's pair ``k`` at ``q`` (that pair only)."""
+    pin.framesForwardKinematics(scene.model, scene.data, q)
+    pin.updateGeometryPlacements(scene.model, scene.data, scene.geometry_model, scene.geometry_data)
+    result = pin.computeDistance(scene.geometry_model, scene.geometry_data, k)
+    return float(result.min_distance)
+
+
 CLOSEST_SAMPLES = 24
 """Samples of the rest of the segment where a sweep stopped, for the closest distance [1]."""
 
@@ -330,7 +338,7 @@ class GrossMotionCheck:
             i = min(int(result.s), len(points) - 2)
             for u in np.linspace(result.s - i, 1.0, CLOSEST_SAMPLES):
                 q = points[i] + u * (points[i + 1] - points[i])
-                d = float(scene.distances(q)[k])
+                d = _pair_distance(scene, q, k)
                 if d < closest:
                     closest, q_closest = d, q
         a, b = pair
