@@ -130,3 +130,21 @@ def test_the_arm_and_the_held_pin_keep_no_margin_against_each_other() -> None:
     assert margins[2] == pytest.approx(
         carrying.margins["palm"] + carrying.displacements["BLOCK"].bound()
     )
+
+
+def test_approach_height_follows_the_certified_height_error() -> None:
+    # seed_4_8_tap with the box ±1 in along z: Δz at the approach (box z and the hand's z error,
+    # certified) exceeds the seed's 1 in standoff, which refused the task. The approach rises to
+    # Δz + the held pin's sweep margin + 1 mm, the target to d_f + Δz + 1 mm.
+    path = TASKS / "height_error.yaml"
+    spec = load_task(path)
+    ctx = build_context(spec)
+    s = plan_task(spec).strategy
+    assert s.errors is not None and s.tap is not None and s.search is None
+    assert s.errors.dz > 2.54 * CM  # ±1 in of box height alone
+    held = ctx.gross.carrying.margins["PIN1"]
+    assert s.standoff >= s.errors.dz + held + 1e-3 - 1e-9
+    assert s.dtry - s.d_f >= s.errors.dz + 1e-3 - 1e-9
+    report = replay(emit_program(s, believed_graph(spec)), path, trials=10, seed=0)
+    assert report.nominal.outcome == "success", report.nominal.message
+    assert report.monte_carlo.outcomes == {"success": 10}

@@ -14,12 +14,13 @@ of the workcell (:mod:`synth.strategies.clearance`).
 Heights (L2186–2190: "the principal constraint" is that the approach point stays above the
 surface and a full insertion stops on force whatever Δz): the seed takes ``standoff = 1 in``
 and ``dtry = d_f + 1 in``; here they are at least that and at least the certified Δz along the
-axis at the approach point plus :data:`APPROACH_CLEARANCE`, ``standoff ≥ Δz + c`` and
-``dtry − d_f ≥ Δz + c``, so a part whose height is poorly known gets a higher approach instead
-of a rejection. The final approach runs through via points along the axis that bound the bow
-of the joint-interpolated move (:mod:`synth.strategies.bow`). The result is the "embryo"
-pin-in-hole strategy (L2201) whose cost is the pickup time plus the transport time: the
-candidate that best-first selection refines.
+axis at the approach point plus :data:`APPROACH_CLEARANCE`, ``standoff ≥ Δz + m + c`` (m the
+held pin's margin in the gross-motion sweep, which ends there) and ``dtry − d_f ≥ Δz + c``, so
+a part whose height is poorly known gets a higher approach instead of a rejection. The final
+approach runs through via points along the axis that bound the bow of the joint-interpolated
+move (:mod:`synth.strategies.bow`). The result is the "embryo" pin-in-hole strategy (L2201)
+whose cost is the pickup time plus the transport time: the candidate that best-first selection
+refines.
 
 Poses are those of the pin end that enters the hole (the tip, or the head when the pin is
 turned over): ``end = hole ∘ trans(rot(ẑ, φ), (0, 0, z))``; the hand is then at
@@ -126,7 +127,10 @@ def approach_heights(ctx: PlanContext, pickup: Pickup) -> tuple[float, float, fl
     ctx.counters.count_bounds(model.space)
     _, certified = model.displacement_along(np.array([0.0, 0.0, 1.0]))
     dz = float(certified.magnitude)
-    standoff = max(opts.standoff, dz + APPROACH_CLEARANCE)
+    # The transport ends at the approach point: its sweep keeps the held pin its ball margin
+    # under the hand error (clearance.GrossMotionCheck) from the part, which Δz alone omits.
+    held = ctx.gross.carrying.margins.get(ctx.pin_al, 0.0)
+    standoff = max(opts.standoff, dz + held + APPROACH_CLEARANCE)
     dtry = ctx.insertion.d_f + max(opts.dtry_extra, dz + APPROACH_CLEARANCE)
     return standoff, dtry, dz
 
