@@ -76,13 +76,18 @@ def test_insertion_parameters_given_and_derived() -> None:
     graph = AttributeGraph(spec)
     assert spec.insertion is not None
     given = derive(graph, spec.insertion)
-    assert given.d_f == pytest.approx(0.0171) and given.dtheta_ok == pytest.approx(math.radians(10))
+    assert given.d_f == pytest.approx(0.0171)
+    # the seed's 10° is above Whitney's wedging limit c/μ = ((.64 − .635)/.64)/0.3 = .026042 rad
+    # (1.492°) for these parts and μ = 0.3, so it is clipped to the limit and the plan says so
+    assert given.dtheta_ok == pytest.approx(0.0078125 / 0.3)
+    assert given.source["dtheta_ok"] == "given, clipped to the wedging limit"
     bare = spec.insertion.model_copy(update={"d_f": None, "dr_ok": None, "dtheta_ok": None})
     derived = derive(graph, bare)
     # Whitney's lead: chamfer .25 + (hole radius .32 − tip radius .13) = .44 cm.
     assert derived.dr_ok == pytest.approx(0.0044)
     assert derived.d_f == pytest.approx(0.0171)  # the hole depth: the pin bottoms out
-    assert derived.dtheta_ok == pytest.approx(math.atan2(0.44, 0.34 + 0.25))
+    # the lead tilt atan(.44 / (.34 + .25)) = 36.7° is far above the wedging limit 1.492°
+    assert math.atan2(0.44, 0.34 + 0.25) > derived.dtheta_ok == pytest.approx(0.0078125 / 0.3)
     assert derived.source["dr_ok"] == "derived" and given.source["dr_ok"] == "given"
 
 

@@ -10,9 +10,17 @@ task may still give them (they override); otherwise these documented rules apply
 * ``Δr_ok = w_chamfer + (r_hole − r_tip)`` [m]: Whitney's lead condition — the lateral error a
   chamfered peg-hole pair absorbs is the hole chamfer width plus the peg's chamfer
   (``r_shaft − r_tip``) plus the radial clearance (``r_hole − r_shaft``);
-* ``Δθ_ok = atan(lead width / lead height)`` [rad] with lead width ``Δr_ok`` and lead height
-  ``taper length + chamfer width`` (45° chamfer): the tilt at which the tip still lands on the
-  combined lead. It ignores friction and compliance, which is why measured values override it.
+* ``Δθ_ok = min(atan(lead width / lead height), θ_wedge)`` [rad]: the tilt at which the entering
+  end still lands on the combined lead (lead width ``Δr_ok``, lead height ``taper length +
+  chamfer width``, 45° chamfer), and at most Whitney's wedging limit ``θ_wedge = c/μ`` with
+  clearance ratio ``c = (D − d)/D`` and friction μ (:mod:`synth.models.jamming`). A tilt
+  above θ_wedge at entry can wedge the pin at its two-point contact whatever the chamfers.
+
+A given d_f, d_s or Δr_ok overrides its rule. A given Δθ_ok is kept up to θ_wedge and clipped
+to it above (``source`` says so, ``notes`` explains): the replay wedges such a pin.
+
+The entering end is the tip for a ``parallel`` insertion and the head (the shaft's full
+radius, no taper) for an ``antiparallel`` one.
 """
 
 from __future__ import annotations
@@ -22,6 +30,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from synth.models.graph import AttributeGraph
+from synth.models.jamming import wedging_tilt
 from synth.models.spec import HoleShape, InsertionSpec, PinShape
 
 
@@ -30,7 +39,9 @@ class InsertionParameters:
     """d_f, d_s, Δr_ok [m], Δθ_ok [rad], the direction, and where each value came from.
 
     ``lead`` [m] is the parts' geometric lead (the derived Δr_ok): what the replay's contact
-    geometry captures, whatever Δr_ok the task gives.
+    geometry captures, whatever Δr_ok the task gives. ``friction`` [1] is μ and
+    ``wedge_tilt`` [rad] Whitney's θ_wedge = c/μ, the bound on ``dtheta_ok``; ``notes`` are
+    remarks for the plan (a given value clipped).
     """
 
     pin: str
@@ -43,6 +54,9 @@ class InsertionParameters:
     dtheta_ok: float
     source: dict[str, str]
     lead: float
+    friction: float
+    wedge_tilt: float
+    notes: tuple[str, ...] = ()
 
 
 def derive(graph: AttributeGraph, spec: InsertionSpec) -> InsertionParameters:
@@ -50,13 +64,17 @@ def derive(graph: AttributeGraph, spec: InsertionSpec) -> InsertionParameters:
     pin_name, hole_name = graph.resolve(spec.pin), graph.resolve(spec.hole)
     pin_shape, hole_shape = graph.nodes[pin_name].shape, graph.nodes[hole_name].shape
     assert isinstance(pin_shape, PinShape) and isinstance(hole_shape, HoleShape)
-    r_hole, r_tip = hole_shape.diameter / 2, pin_shape.tip_radius
+    r_hole = hole_shape.diameter / 2
+    # the entering end: the tapered tip, or the flat head of a turned-over pin
+    head_first = spec.direction == "antiparallel"
+    r_end = pin_shape.diameter / 2 if head_first else pin_shape.tip_radius
+    taper = 0.0 if head_first else pin_shape.tip_taper_length
     derived = {
         "d_f": min(hole_shape.depth, pin_shape.length - pin_shape.tip_taper_length),
         "d_s": 0.0,
-        "dr_ok": hole_shape.chamfer_width + max(r_hole - r_tip, 0.0),
+        "dr_ok": hole_shape.chamfer_width + max(r_hole - r_end, 0.0),
     }
-    lead_height = pin_shape.tip_taper_length + hole_shape.chamfer_width
+    lead_height = taper + hole_shape.chamfer_width
     values: dict[str, float] = {}
     source: dict[str, str] = {}
     for key in ("d_f", "d_s", "dr_ok"):
@@ -64,10 +82,35 @@ def derive(graph: AttributeGraph, spec: InsertionSpec) -> InsertionParameters:
         values[key] = derived[key] if given is None else given
         source[key] = "derived" if given is None else "given"
     dr_ok = values["dr_ok"]
-    derived_dtheta = math.atan2(dr_ok, lead_height) if lead_height > 0 else 0.0
-    values["dtheta_ok"] = derived_dtheta if spec.dtheta_ok is None else spec.dtheta_ok
-    source["dtheta_ok"] = "derived" if spec.dtheta_ok is None else "given"
+    friction = spec.friction
+    wedge = wedging_tilt(hole_shape.diameter, pin_shape.diameter, friction)
+    lead_tilt = math.atan2(dr_ok, lead_height) if lead_height > 0 else math.pi / 2
+    notes: list[str] = []
+    if spec.dtheta_ok is None:
+        values["dtheta_ok"] = min(lead_tilt, wedge)
+        source["dtheta_ok"] = "derived" if lead_tilt <= wedge else "derived: wedging limit"
+    elif spec.dtheta_ok > wedge:
+        values["dtheta_ok"] = wedge
+        source["dtheta_ok"] = "given, clipped to the wedging limit"
+        notes.append(
+            f"note: the task's Δθ_ok = {math.degrees(spec.dtheta_ok):.3f}° exceeds the wedging "
+            f"limit c/μ = {math.degrees(wedge):.3f}° (clearance ratio "
+            f"{(hole_shape.diameter - pin_shape.diameter) / hole_shape.diameter:.4f}, "
+            f"μ = {friction:g}; Whitney 1982); planned with the limit"
+        )
+    else:
+        values["dtheta_ok"] = spec.dtheta_ok
+        source["dtheta_ok"] = "given"
     start = graph.resolve(spec.start_hole) if spec.start_hole else None
     return InsertionParameters(
-        pin_name, hole_name, start, spec.direction, source=source, lead=derived["dr_ok"], **values
+        pin_name,
+        hole_name,
+        start,
+        spec.direction,
+        source=source,
+        lead=derived["dr_ok"],
+        friction=friction,
+        wedge_tilt=wedge,
+        notes=tuple(notes),
+        **values,
     )

@@ -19,7 +19,8 @@ from scipy.optimize import linprog
 
 from synth.exceptions import SpecError
 from synth.models.features import check_contacts
-from synth.models.spec import PARAMS, WORLD, TaskSpec, Uncertainty
+from synth.models.jamming import fit_problem
+from synth.models.spec import PARAMS, WORLD, FrameSpec, InsertionSpec, TaskSpec, Uncertainty
 
 PathKey = tuple[str | int, ...]
 
@@ -121,8 +122,28 @@ def check_task(spec: TaskSpec, lines: dict[PathKey, int] | None = None) -> None:
                 fail(("insertion", field), f"unknown frame {ref!r}")
             elif frame.shape is None or frame.shape.type != want:
                 fail(("insertion", field), f"{ref!r} is not a {want}")
+        _check_fit(ins, by_any, fail)
 
     check_contacts(spec, fail)  # contacts section: features exist, pairs and parents make sense
+
+
+def _check_fit(ins: InsertionSpec, frames: dict[str, FrameSpec], fail: Any) -> None:
+    """Fail if the insertion's pin is not thinner than its target (or start) hole."""
+
+    def shape(ref: str | None) -> tuple[str, Any] | None:
+        frame = None if ref is None else frames.get(ref) or frames.get(ref.upper())
+        return None if frame is None else (frame.al_name, frame.shape)
+
+    pin_ = shape(ins.pin)
+    if pin_ is None:
+        return
+    for field in ("hole", "start_hole"):
+        found = shape(getattr(ins, field))
+        if found is None:
+            continue
+        problem = fit_problem(pin_[0], pin_[1].diameter, found[0], found[1].diameter)
+        if problem is not None:
+            fail(("insertion", field), problem)
 
 
 def _check_feasible(unc: Uncertainty, loc: PathKey, fail: Any) -> None:

@@ -387,10 +387,18 @@ class FrameSpec(_Model):
         return _check_al_name(v)
 
 
+DEFAULT_FRICTION = 0.3
+"""[1] pin–hole friction coefficient when the task gives none: machined, lightly oiled steel
+on steel (Marks' Standard Handbook for Mechanical Engineers, Table 3.2.1: steel on steel 0.74
+dry static, 0.1–0.2 greasy; 0.3 is a cautious value for oiled parts). Dry parts should state
+theirs (``insertion.friction``)."""
+
+
 class InsertionSpec(_Model):
     """Which pin goes into which hole, and the insertion parameters of seed §4.2 (L1990–2010).
 
-    Unset parameters are derived from the geometry by :func:`synth.models.insertion.derive`.
+    Unset parameters are derived from the geometry by :func:`synth.models.insertion.derive`;
+    ``friction`` (μ) sets the wedging limit Δθ_ok never exceeds.
     """
 
     pin: str
@@ -401,6 +409,9 @@ class InsertionSpec(_Model):
     d_s: NonNegativeLength | None = None
     dr_ok: NonNegativeLength | None = None
     dtheta_ok: Annotated[float, BeforeValidator(_angle), Field(ge=0)] | None = None
+    friction: Annotated[float, Field(ge=0, allow_inf_nan=False)] = DEFAULT_FRICTION
+    """[1] pin–hole friction coefficient μ: the planner's wedging limit
+    (:mod:`synth.models.jamming`) and the replay's (:mod:`synth.replay.wedging`)."""
 
 
 def _joint_rates(order: int) -> Any:
@@ -512,8 +523,19 @@ class ManipulatorSpec(_Model):
         return _check_al_name(v, allow_predeclared=True)
 
 
+class ProofSpec(_Model):
+    """How a program for this task must be proven (``synth plan`` options override it).
+
+    ``min_success``: the success rate [1] the replay's Monte Carlo proof must reach;
+    ``trials``: the proof's budget of sampled worlds (0: the nominal replay only).
+    """
+
+    min_success: float = Field(default=0.99, ge=0.0, le=1.0)
+    trials: int | None = Field(default=None, ge=0, le=1_000_000)
+
+
 class TaskSpec(_Model):
-    """A whole task: frame tree, insertion, manipulator and contacts."""
+    """A whole task: frame tree, insertion, manipulator, contacts and the proof it needs."""
 
     name: str
     description: str = ""
@@ -521,6 +543,7 @@ class TaskSpec(_Model):
     insertion: InsertionSpec | None = None
     manipulator: ManipulatorSpec | None = None
     contacts: tuple[ContactSpec, ...] = ()
+    proof: ProofSpec | None = None
 
     @field_validator("frames")
     @classmethod

@@ -37,7 +37,7 @@ from synth.models.arm.collision import Obstacle, coal_geometry, convex_hull
 from synth.models.graph import AttributeGraph
 from synth.models.meshes import box_with_holes
 from synth.models.meshes import pin as pin_mesh
-from synth.models.spec import HoleShape, PinShape
+from synth.models.spec import DEFAULT_FRICTION, HoleShape, PinShape
 
 __all__ = [
     "TABLE",
@@ -158,6 +158,8 @@ class Workcell:
     obstacles: tuple[Obstacle, ...]
     holes: tuple[HoleSite, ...]
     pins: Mapping[str, PinModel]
+    friction: float = DEFAULT_FRICTION
+    """[1] pin–hole friction coefficient (the task's ``insertion.friction``)."""
 
     def holes_in(self, owner: str) -> tuple[HoleSite, ...]:
         """The holes drilled into obstacle ``owner``."""
@@ -246,7 +248,9 @@ class WorkcellModel:
                 geometry = self._cached(key, build)
             obstacles.append(Obstacle(node.al_name, geometry, pose))
             holes += [site for _, site in drilled]
-        return Workcell(tuple(obstacles), tuple(holes), self.pins)
+        insertion = self.graph.spec.insertion
+        friction = DEFAULT_FRICTION if insertion is None else insertion.friction
+        return Workcell(tuple(obstacles), tuple(holes), self.pins, friction)
 
     def _cached(self, key: object, build: Callable[[], trimesh.Trimesh]) -> coal.CollisionGeometry:
         geometry = self._geometry.get(key)

@@ -33,7 +33,8 @@ from numpy.typing import NDArray
 
 from synth.models.arm.collision import Obstacle, convex_hull
 from synth.models.workcell import HoleSite, PinModel
-from synth.replay.capture import captures, tip_placement
+from synth.replay.capture import TipPlacement, captures, seat_depth, tip_placement
+from synth.replay.wedging import wedges
 
 __all__ = ["GuidedEnd", "PinContact", "ScrapeEnd", "first_contact", "guided_motion", "scrape"]
 
@@ -52,14 +53,15 @@ _BISECTIONS = 40
 class PinContact:
     """The first contact of the pin along a segment.
 
-    ``s``: the path parameter; ``kind``: ``capture`` (into ``hole``) or ``surface``;
+    ``s``: the path parameter; ``kind``: ``capture`` (into ``hole``), ``wedge`` (captured at a
+    tilt that wedges it there, :mod:`synth.replay.wedging`) or ``surface``;
     ``obstacle``: the name of what was touched; ``normal``: the obstacle's unit surface normal
     there, pointing at the pin (world); ``point``: the contact point on the obstacle [m];
     ``pin_point``: the pin's nearest point in the pin frame [m]; ``distance`` [m].
     """
 
     s: float
-    kind: Literal["capture", "surface"]
+    kind: Literal["capture", "surface", "wedge"]
     obstacle: str
     hole: HoleSite | None
     normal: NDArray[np.float64]
@@ -143,8 +145,11 @@ def first_contact(
     start: float = 0.0,
     end: float = 1.0,
     clearance: float = 2e-5,
+    friction: float | None = None,
 ) -> PinContact | None:
     """The first contact of the pin over s ∈ [start, end], or None (see the module docstring).
+
+    With ``friction`` (μ) a capture at a tilt that wedges the pin is a ``wedge`` contact.
 
     ``speed`` [m per unit s] bounds the speed of every point of the pin along the path;
     ``clearance`` [m] is the distance that counts as touching. A pin that starts closer than
@@ -167,7 +172,7 @@ def first_contact(
         for k, target in enumerate(targets):
             d, exact = _bound(pin_, pose, target)
             if exact and d <= limits[k]:
-                return _classify(pin_, pose, s, target, holes)
+                return _classify(pin_, pose, s, target, holes, friction)
             distances.append(d - 0.5 * limits[k])
         step_d = min(distances, default=np.inf)
         if s >= end:
@@ -184,12 +189,12 @@ def first_contact(
         for index in crossed.tolist():
             hole = holes[index]
             crossing = _crossing(hole, pose_at, s, s_next)
-            if captures(hole, pin_model, tip_placement(hole, pose_at(crossing))):
+            placement = tip_placement(hole, pose_at(crossing))
+            if captures(hole, pin_model, placement):
                 axis = hole.axis
                 point = hole.world_from_hole.translation.copy()
-                return PinContact(
-                    crossing, "capture", hole.owner, hole, axis, point, np.zeros(3), 0.0
-                )
+                kind = _entry(hole, pin_model, placement, friction)
+                return PinContact(crossing, kind, hole.owner, hole, axis, point, np.zeros(3), 0.0)
         s, pose = s_next, pose_next
     raise RuntimeError("pin contact search did not converge")
 
@@ -205,8 +210,24 @@ def _crossing(hole: HoleSite, pose_at: PoseAt, lo: float, hi: float) -> float:
     return hi
 
 
+def _entry(
+    hole: HoleSite, model: PinModel, placement: TipPlacement, friction: float | None
+) -> Literal["capture", "wedge"]:
+    """``wedge`` if a pin captured at ``placement`` wedges (:func:`wedges`), else ``capture``."""
+    if friction is None:
+        return "capture"
+    bore, shaft = 2.0 * hole.radius, 2.0 * model.radius
+    stuck = wedges(placement.tilt, bore, shaft, friction, seat_depth(hole, model))
+    return "wedge" if stuck else "capture"
+
+
 def _classify(
-    pin_: _Pin, pose: pin.SE3, s: float, target: _Target, holes: Sequence[HoleSite]
+    pin_: _Pin,
+    pose: pin.SE3,
+    s: float,
+    target: _Target,
+    holes: Sequence[HoleSite],
+    friction: float | None = None,
 ) -> PinContact:
     d, normal, point, on_pin = pin_.distance(pose, target, exact=True)
     local = pose.actInv(on_pin)
@@ -216,7 +237,8 @@ def _classify(
             continue
         placement = tip_placement(hole, pose)
         if placement.axial <= hole.mouth_radius and captures(hole, pin_.model, placement):
-            return PinContact(s, "capture", name, hole, hole.axis, point, local, d)
+            kind = _entry(hole, pin_.model, placement, friction)
+            return PinContact(s, kind, name, hole, hole.axis, point, local, d)
     # Coal's normal points from the pin to the obstacle; the surface normal is opposite
     norm = float(np.linalg.norm(normal)) if np.all(np.isfinite(normal)) else 0.0
     outward = -normal / norm if norm > 1e-12 else np.zeros(3)

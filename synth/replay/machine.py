@@ -30,7 +30,9 @@ motion, except in two cases:
   it bottoms at its seated depth (a contact); if the commanded path stops short, the motion
   arrives with the pin partly inserted. A pin standing in a hole when a motion starts is
   withdrawn along the hole's axis; a path that drags it more than ``compliance`` sideways while
-  it is in the hole jams it (``collision``);
+  it is in the hole jams it (``collision``). A pin that arrives tilted beyond the angle at which
+  its two-point contact sticks (:mod:`synth.replay.wedging`, the task's friction) wedges there:
+  a ``wedged`` violation;
 * *sliding*: a push meeting a surface at less than ``slide_angle`` (a pin lifted or lowered
   beside a box) slides along it, the arm yielding along the normal until the path clears the
   obstacle; needing more than ``compliance`` jams it (a contact).
@@ -121,6 +123,7 @@ from synth.replay.motion import (
 from synth.replay.reach import ReachProblem, describe_pose, solve_near
 from synth.replay.report import Violation, ViolationKind
 from synth.replay.truth import HandErrors
+from synth.replay.wedging import wedging_onset
 
 __all__ = ["PinState", "ReplayMachine", "ReplayOptions", "ViolationStop"]
 
@@ -540,9 +543,14 @@ class ReplayMachine(MotionGate):
                     self.workcell.holes,
                     start=s,
                     clearance=options.contact_clearance,
+                    friction=self.workcell.friction,
                 )
                 if found is None:
                     s = 1.0
+                elif found.kind == "wedge":
+                    assert found.hole is not None
+                    entry = commanded(found.s)
+                    pin_stop = self._wedged(held, found.hole, entry, seg, found.s, line)
                 elif found.kind == "capture":
                     assert found.hole is not None
                     hole, s = found.hole, found.s
@@ -603,6 +611,21 @@ class ReplayMachine(MotionGate):
                 motion.checkpoints.append(Checkpoint(end_time, level=level))
         motion.checkpoints.sort(key=lambda c: (c.elapsed, -1.0 if c.level is None else c.level))
         return motion
+
+    def _wedged(
+        self, held: PinState, hole: HoleSite, pose: pin.SE3, seg: Segment, s: float, line: int
+    ) -> Stop:
+        """The stop of a pin that enters ``hole`` at a wedging tilt (a ``wedged`` violation)."""
+        tilt = tip_placement(hole, pose).tilt
+        onset = wedging_onset(2.0 * hole.radius, 2.0 * held.model.radius, self.workcell.friction)
+        detail = (
+            f"{held.model.name} wedged in {hole.name}: it entered tilted "
+            f"{math.degrees(tilt):.2f}°, "
+            f"beyond the {math.degrees(onset):.2f}° at which its two-point contact sticks "
+            f"(μ = {self.workcell.friction:g})"
+        )
+        violation = self._violation("wedged", line, detail, self._time + seg.time(s))
+        return Stop(s, "violation", held.model.name, hole.name, violation=violation)
 
     def _sweep_options(self, scene: CollisionScene, q: NDArray[np.float64]) -> SweepOptions:
         """The sweep's options, with the clearance halved below a contact the motion starts in.

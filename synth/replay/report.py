@@ -13,7 +13,8 @@ returns::
 hole, the hand has let go of it and is clear, no violation); ``abort`` (the program executed
 ``ABORT``); ``error`` (the program is faulty: an AL runtime error such as an unknown name);
 ``violation`` (the arm could not do what the program asked: a target out of reach or beyond a
-joint limit, or a collision — the run ends there); ``failure`` (the program ran to its end but
+joint limit, a collision, or a pin wedged in a hole it entered too tilted — the run ends
+there); ``failure`` (the program ran to its end but
 the pin is not seated, or the hand still holds it or touches it). The issue names the first
 three; the other two keep a program that misbehaves apart from one that gives up.
 """
@@ -37,7 +38,7 @@ __all__ = [
     "wilson_interval",
 ]
 
-ViolationKind = Literal["unreachable", "joint_limit", "collision"]
+ViolationKind = Literal["unreachable", "joint_limit", "collision", "wedged"]
 Outcome = Literal["success", "failure", "abort", "violation", "error"]
 OUTCOMES: tuple[Outcome, ...] = ("success", "failure", "abort", "violation", "error")
 
