@@ -80,6 +80,7 @@ def refine(ctx: PlanContext, cand: Candidate) -> Refined | Rejection:
             "(seed §4.5.1: grounds for rejection)",
         )
     decisions.append(f"tilt Δθ = {_deg(fp.dtheta)} ≤ Δθ_ok = {_deg(ins.dtheta_ok)}")
+    decisions.extend(ins.notes)  # a given Δθ_ok clipped to the wedging limit
     if fp.dz >= standoff:
         return Rejection(
             cand.name,
