@@ -20,7 +20,8 @@ A given d_f, d_s or Δr_ok overrides its rule. A given Δθ_ok is kept up to θ_
 to it above (``source`` says so, ``notes`` explains): the replay wedges such a pin.
 
 The entering end is the tip for a ``parallel`` insertion and the head (the shaft's full
-radius, no taper) for an ``antiparallel`` one.
+radius, no taper) for an ``antiparallel`` one. The planner refuses antiparallel insertions
+(:func:`refuse_unprovable`): no program for them can be proven yet.
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ import math
 from dataclasses import dataclass
 from typing import Literal
 
+from synth.exceptions import SpecError
 from synth.models.graph import AttributeGraph
 from synth.models.jamming import wedging_tilt
 from synth.models.spec import HoleShape, InsertionSpec, PinShape
@@ -113,4 +115,24 @@ def derive(graph: AttributeGraph, spec: InsertionSpec) -> InsertionParameters:
         wedge_tilt=wedge,
         notes=tuple(notes),
         **values,
+    )
+
+
+def refuse_unprovable(params: InsertionParameters, pin_al: str, hole_al: str) -> None:
+    """Raise :class:`SpecError` at ``insertion.direction`` for a turned-over (antiparallel) pin.
+
+    Such a program cannot be proven: the replay captures, seats and checks a pin by its tapered
+    tip only, never by its head; and the emitted guard ``FORCE(ORIENT(pin)*ZHAT)`` is evaluated
+    when its motion starts (AL evaluates a motion's expressions then, like its destinations),
+    so in every search move, which starts with the pin already turned over, it points into the
+    hole and never feels the pin arrive.
+    """
+    if params.direction != "antiparallel":
+        return
+    raise SpecError(
+        "insertion.direction",
+        f"a turned-over pin cannot be planned yet: {pin_al} would enter {hole_al} head first, "
+        "and the replay captures and seats a pin only by its tip while the search's force "
+        f"guard FORCE(ORIENT({pin_al})*ZHAT) would point into the hole, so no program could "
+        "be proven; insert it tip first (direction: parallel)",
     )

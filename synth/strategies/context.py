@@ -31,7 +31,7 @@ from synth.models.arm import (
     rank_solutions,
 )
 from synth.models.graph import AttributeGraph, pose_to_se3
-from synth.models.insertion import InsertionParameters, derive
+from synth.models.insertion import InsertionParameters, derive, refuse_unprovable
 from synth.models.spec import HandSpec, HoleShape, PinShape, TaskSpec, Uncertainty
 from synth.models.world import Fact, World
 from synth.strategies.clearance import GrossMotionCheck
@@ -213,6 +213,7 @@ def build_context(
     assert spec.insertion is not None and spec.manipulator is not None
     opts = options or PlanOptions()
     insertion = derive(graph, spec.insertion)
+    refuse_unprovable(insertion, graph.al_names[insertion.pin], graph.al_names[insertion.hole])
     assert insertion.start_hole is not None
     pin_shape = graph.nodes[insertion.pin].shape
     hole_shape = graph.nodes[insertion.hole].shape
