@@ -17,6 +17,11 @@ from synth.exceptions import SynthError
 
 EXIT_USAGE = 2
 EXIT_INTERNAL = 70
+DEFAULT_PROOF_TRIALS = 100
+"""Proof trials of ``synth plan`` (kept equal to :data:`synth.replay.proof.DEFAULT_PROOF_TRIALS`
+by a test; the CLI does not import the replay to print its help)."""
+DEFAULT_MIN_SUCCESS = 0.99
+"""Required proof success rate (as :data:`synth.replay.proof.DEFAULT_MIN_SUCCESS`)."""
 
 Command = Callable[[argparse.Namespace], int]
 
@@ -62,32 +67,43 @@ def _cmd_serve(args: argparse.Namespace) -> int:
 def _cmd_plan(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from synth.codegen.emitter import emit_program
-    from synth.errors.locate import believed_graph
     from synth.models.loader import load_task
+    from synth.pipeline import SynthesisOptions, synthesize
+    from synth.replay.proof import ProofOptions
     from synth.report import plan_summary
-    from synth.strategies import plan_task
+    from synth.strategies import PlanOptions
 
     spec = load_task(args.task)
-    result = plan_task(
-        spec,
-        try_harder=args.try_harder,
-        exhaustive=args.exhaustive,
-        base_dir=Path(args.task).resolve().parent,
+    if args.proof_trials is not None and args.proof_trials < 0:
+        raise SynthError(f"--proof-trials must be 0 or more, got {args.proof_trials}")
+    if args.min_success is not None and not 0.0 <= args.min_success <= 1.0:
+        raise SynthError(f"--min-success must lie between 0 and 1, got {args.min_success}")
+    workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
+    if workers < 1:
+        raise SynthError(f"--workers must be 1 or more, got {workers}")
+    options = SynthesisOptions(
+        plan=PlanOptions(try_harder=args.try_harder, exhaustive=args.exhaustive),
+        proof=ProofOptions.for_task(
+            spec,
+            trials=args.proof_trials,
+            min_success=args.min_success,
+            seed=args.seed,
+            workers=workers,
+        ),
+        preamble=args.preamble,
     )
-    program = emit_program(result.strategy, believed_graph(spec), preamble=args.preamble)
+    result = synthesize(spec, options, base_dir=Path(args.task).resolve().parent)
     if args.output is not None:
         out = Path(args.output)
         try:
             out.parent.mkdir(parents=True, exist_ok=True)
-            out.write_text(program, encoding="utf-8", newline="\n")
+            out.write_text(result.program, encoding="utf-8", newline="\n")
         except OSError as exc:
             raise SynthError(f"cannot write {out}: {exc.strerror or exc}") from None
-    document = {**result.to_json(), "program": program}
     if args.json:
-        print(json.dumps(document, indent=2))
+        print(json.dumps(result.to_json(), indent=2))
     else:
-        print(plan_summary(result))
+        print(plan_summary(result.plan, result.proof))
         if args.output is not None:
             print(f"AL program written to {args.output}")
     return 0
@@ -114,7 +130,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print JSON (SI units)")
     p.set_defaults(func=_cmd_errors)
 
-    p = sub.add_parser("plan", help="choose a pin-in-hole strategy (seed ch. IV §4.1–4.6)")
+    p = sub.add_parser(
+        "plan",
+        help="choose a pin-in-hole strategy (seed ch. IV §4.1–4.6) and write it only once its "
+        "replay proves it",
+        description="Plan best-first, emit the chosen strategy's AL program and prove it by "
+        "replay (nominal run and Monte Carlo). A candidate that fails its proof is rejected "
+        "and the next is tried; exit 2 when none is proven, with the root cause first.",
+    )
     p.add_argument("task", help="task specification (YAML) with insertion and manipulator")
     p.add_argument("--json", action="store_true", help="print JSON (SI units)")
     p.add_argument(
@@ -137,6 +160,29 @@ def build_parser() -> argparse.ArgumentParser:
         "--preamble",
         action="store_true",
         help="start the program with the task's frame declarations and affixments (stand-alone)",
+    )
+    p.add_argument(
+        "--proof-trials",
+        type=int,
+        default=None,
+        metavar="N",
+        help="Monte Carlo trials of the replay proof (default: the task's proof.trials, else "
+        f"{DEFAULT_PROOF_TRIALS}; 0: the nominal replay only)",
+    )
+    p.add_argument(
+        "--min-success",
+        type=float,
+        default=None,
+        metavar="RATE",
+        help="success rate the proof must reach (default: the task's proof.min_success, else "
+        f"{DEFAULT_MIN_SUCCESS:g})",
+    )
+    p.add_argument("--seed", type=int, default=0, help="random seed of the proof (default: 0)")
+    p.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        help="processes running the proof's trials (default: one per CPU core)",
     )
     p.set_defaults(func=_cmd_plan)
 

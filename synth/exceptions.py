@@ -6,6 +6,8 @@ The CLI maps any ``SynthError`` to a one-line message and exit code 2; the serve
 
 from __future__ import annotations
 
+from typing import Any
+
 
 class SynthError(Exception):
     """Base class of every error synth raises on purpose."""
@@ -185,17 +187,35 @@ class CodegenError(SynthError):
 
 
 class NoStrategyError(SynthError):
-    """The planner found no feasible strategy: every candidate was rejected.
+    """The planner found no feasible (or no proven) strategy: every candidate was rejected.
 
-    ``reasons`` lists ``(candidate, reason)`` pairs, one per rejection, in the order the planner
-    made them (grasp generation, approach, refinement); the message shows them one per line.
+    ``rejections`` lists the :class:`~synth.strategies.records.Rejection` records in the order
+    the planner made them (grasp generation, approach, refinement, proof); ``root`` is their
+    :class:`~synth.strategies.causes.RootCause`. The message's first line names the root cause;
+    the per-candidate reasons follow, one per line (ω discarded by the seed's rating folded
+    into one line, with the ``--try-harder`` hint only where more ω could help).
     """
 
-    def __init__(self, task: str, reasons: tuple[tuple[str, str], ...]) -> None:
+    def __init__(self, task: str, rejections: tuple[Any, ...], root: Any) -> None:
         self.task = task
-        self.reasons = reasons
-        lines = [f"no feasible pin-in-hole strategy for task {task!r}:"]
-        lines += [f"  - {candidate}: {reason}" for candidate, reason in reasons]
-        if not reasons:
+        self.rejections = rejections
+        self.root = root
+        self.reasons = tuple((r.candidate, r.reason) for r in rejections)
+        lines = [f"no proven pin-in-hole strategy for task {task!r}: {root.sentence()}"]
+        pruned = [r for r in rejections if r.kind == "pruned"]
+        for r in rejections:
+            if r.kind != "pruned":
+                lines.append(f"  - {r.candidate} [{r.stage or '?'}, {r.kind}]: {r.reason}")
+        if pruned:
+            hint = (
+                " (--try-harder keeps them)"
+                if root.helped_by_trying_harder
+                else " (keeping them would not help: the root cause is not the arm's pose)"
+            )
+            lines.append(
+                f"  - {len(pruned)} grasp orientations ω discarded by the seed's rating "
+                f"(L2122){hint}"
+            )
+        if not rejections:
             lines.append("  - no candidate strategy was generated")
         super().__init__("\n".join(lines))

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -14,6 +15,9 @@ from synth.errors.locate import LocationResult
 from synth.models.graph import AttributeGraph
 from synth.models.spec import WORLD
 from synth.strategies.records import Destination, PinInHoleStrategy, PlanResult
+
+if TYPE_CHECKING:
+    from synth.replay.proof import Proof
 
 _ROWS = (
     ("dx", "Δx", "length"),
@@ -254,8 +258,11 @@ def strategy_spec(s: PinInHoleStrategy) -> list[str]:
     return lines
 
 
-def plan_summary(result: PlanResult) -> str:
-    """The ``synth plan`` text: the chosen strategy, its reasons, candidates and rejections."""
+def plan_summary(result: PlanResult, proof: Proof | None = None) -> str:
+    """The ``synth plan`` text.
+
+    The chosen strategy, its reasons, its proof (when given), the candidates and rejections.
+    """
     s = result.strategy
     lines = [
         "Chosen strategy (lengths in cm, angles in degrees, times in s; certified errors):",
@@ -276,6 +283,8 @@ def plan_summary(result: PlanResult) -> str:
             f"Δz {_num(100 * fo.get('dz', math.nan))}, "
             f"Δθ {_num(math.degrees(fo.get('dtheta', math.nan)))} deg"
         )
+    if proof is not None:
+        lines += ["", f"Proof: {proof.summary()}"]
     lines += [
         "",
         f"Candidates ({len(result.candidates)}; {result.mode} refined {result.refined}, "
@@ -293,7 +302,9 @@ def plan_summary(result: PlanResult) -> str:
         mark = "*" if c is s else " "
         lines.append(f"{mark} {c.name:36}{c.ttime:10.2f}{fine}{total}  {what or 'none'}")
     lines += ["", f"Rejected ({len(result.rejected)}):"]
-    lines += [f"  - {r.candidate}: {r.reason}" for r in result.rejected] or ["  none"]
+    lines += [
+        f"  - {r.candidate} [{r.stage or '?'}, {r.kind}]: {r.reason}" for r in result.rejected
+    ] or ["  none"]
     counts = ", ".join(f"{k} {v}" for k, v in result.counters.items())
     lines += ["", f"Planning time {result.planning_time:.3f} s ({counts})"]
     return "\n".join(lines)

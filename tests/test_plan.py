@@ -29,13 +29,13 @@ FIXTURES = Path("fixtures/tasks")
 @pytest.fixture(scope="module")
 def seed():
     spec = load_task(FIXTURES / "seed_4_8.yaml")
-    return plan_task(spec), plan_task(spec, exhaustive=True)
+    return plan_task(spec), plan_task(spec, options=PlanOptions(exhaustive=True))
 
 
 @pytest.fixture(scope="module")
 def tap():
     spec = load_task(FIXTURES / "seed_4_8_tap.yaml")
-    return plan_task(spec), plan_task(spec, exhaustive=True)
+    return plan_task(spec), plan_task(spec, options=PlanOptions(exhaustive=True))
 
 
 def test_seed_4_8_searches_and_does_not_tap(seed) -> None:
@@ -109,7 +109,7 @@ def test_best_first_and_exhaustive_agree(seed, tap) -> None:
     # rest: on the fixture-located box (1 of 5 refined, benchmarks/plan.py); the seed tasks'
     # candidates now all pass within the cutoff, so there it saves nothing.
     located = load_task(FIXTURES / "seed_4_8_fixture.yaml")
-    bf, ex = plan_task(located), plan_task(located, exhaustive=True)
+    bf, ex = plan_task(located), plan_task(located, options=PlanOptions(exhaustive=True))
     assert bf.strategy.name == ex.strategy.name and bf.refined < ex.refined
 
 
@@ -131,7 +131,7 @@ def test_cli_json_and_text(capsys) -> None:
     assert strategy["dtry"] == pytest.approx(0.0425) and strategy["standoff"] == 0.0254
     assert doc["refined"] >= 1 and doc["planning_time"] > 0
     assert doc["counters"]["ik"] > 0
-    assert all({"candidate", "reason"} == set(r) for r in doc["rejected"])
+    assert all({"candidate", "reason", "cause", "stage"} == set(r) for r in doc["rejected"])
 
     assert main(["plan", str(FIXTURES / "seed_4_8_tap.yaml"), "--exhaustive"]) == 0
     out = capsys.readouterr().out
@@ -158,9 +158,13 @@ def test_no_strategy_when_the_tilt_is_never_good_enough(tmp_path, capsys) -> Non
     # pickups that survive ω pruning (3 per γ, L2122) less those whose moves are obstructed.
     obstructed = [r for _, r in info.value.reasons if " sweeps " in r]
     assert tilt and len(tilt) + len(obstructed) == 9
+    assert info.value.root.cause == "tilt"  # the deepest stage reached is refinement's tilt
     assert main(["plan", str(path)]) == 2
     err = capsys.readouterr().err
-    assert "no feasible pin-in-hole strategy" in err and "exceeds Δθ_ok = 0.100°" in err
+    first = err.splitlines()[0]
+    assert "no proven pin-in-hole strategy" in first and "tilt" in first, first
+    assert "exceeds Δθ_ok = 0.100°" in first
+    assert "--try-harder keeps them" not in err  # more ω cannot cure a hand that tilts too much
 
 
 def test_no_strategy_when_the_box_is_out_of_reach(tmp_path, capsys) -> None:
@@ -179,7 +183,7 @@ def test_no_strategy_when_the_box_is_out_of_reach(tmp_path, capsys) -> None:
 )
 def test_every_other_fixture_best_first_equals_exhaustive(path: Path) -> None:
     spec = load_task(path)
-    best_first, exhaustive = plan_task(spec), plan_task(spec, exhaustive=True)
+    best_first, exhaustive = plan_task(spec), plan_task(spec, options=PlanOptions(exhaustive=True))
     assert best_first.strategy.name == exhaustive.strategy.name
     assert best_first.strategy.goodness == pytest.approx(exhaustive.strategy.goodness)
     assert best_first.refined <= exhaustive.refined == len(exhaustive.candidates)

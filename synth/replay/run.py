@@ -14,8 +14,9 @@ the hand errors. A trial's result depends only on (program, task, seed, i): the 
 number of workers and any order of completion.
 
 **Parallelism.** With ``workers > 1`` the trials run in a process pool (``spawn`` start
-method; each worker parses the program and builds the arm and meshes once), in chunks; the
-``progress`` callback is called in the caller's process as chunks complete. The library does no
+method; each worker parses the program and builds the arm and meshes once), in chunks
+(:mod:`synth.replay.trials`); the ``progress`` callback is called in the caller's process as
+trials complete, in trial order. The library does no
 printing: the CLI draws the progress bar.
 
 **Outcome of a run** (:mod:`synth.replay.report`): ``abort`` when the program aborts, ``error``
@@ -26,11 +27,8 @@ hand clear; a task without an insertion succeeds by running to its end) and ``fa
 
 from __future__ import annotations
 
-import math
-import multiprocessing
 from collections import Counter
 from collections.abc import Callable, Sequence
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -51,6 +49,7 @@ from synth.models.workcell import WorkcellModel
 from synth.replay.machine import ReplayMachine, ReplayOptions, ViolationStop
 from synth.replay.reach import describe_pose
 from synth.replay.report import OUTCOMES, MonteCarloReport, Outcome, ReplayReport, RunReport
+from synth.replay.trials import TrialPool, iter_trials, job_for
 from synth.replay.truth import HandErrors, TrueWorld, nominal_world, sample_world
 
 __all__ = [
@@ -64,6 +63,7 @@ __all__ = [
     "run_trial",
     "run_world",
     "summarise",
+    "trial_errors",
     "trial_seed",
 ]
 
@@ -220,66 +220,15 @@ def summarise(runs: Sequence[RunReport], seed: int) -> MonteCarloReport:
     )
 
 
-# --------------------------------------------------------------------------------------------
-# Workers
+def trial_errors(context: ReplayContext, seed: int, index: int) -> dict[str, dict[str, float]]:
+    """The error parameters trial ``index`` sampled, per perturbed frame [m, rad].
 
-_WORKER: ReplayContext | None = None
-
-
-def _init_worker(
-    program_text: str,
-    task: TaskSpec,
-    filename: str,
-    base_dir: str | None,
-    options: ReplayOptions,
-) -> None:
-    global _WORKER
-    _WORKER = build_context(
-        program_text, task, filename=filename, base_dir=base_dir, options=options
-    )
-
-
-def _run_chunk(seed: int, start: int, stop: int) -> list[RunReport]:
-    assert _WORKER is not None, "worker not initialised"
-    return [run_trial(_WORKER, seed, i) for i in range(start, stop)]
-
-
-def _chunks(trials: int, workers: int) -> list[tuple[int, int]]:
-    size = max(1, min(25, math.ceil(trials / (8 * workers))))
-    return [(i, min(i + size, trials)) for i in range(0, trials, size)]
-
-
-def _monte_carlo_parallel(
-    program_text: str,
-    context: ReplayContext,
-    filename: str,
-    base_dir: str | None,
-    trials: int,
-    seed: int,
-    workers: int,
-    progress: Progress | None,
-) -> list[RunReport]:
-    results: list[RunReport | None] = [None] * trials
-    done = 0
-    with ProcessPoolExecutor(
-        max_workers=workers,
-        mp_context=multiprocessing.get_context("spawn"),
-        initializer=_init_worker,
-        initargs=(program_text, context.spec, filename, base_dir, context.options),
-    ) as pool:
-        pending: dict[Future[list[RunReport]], tuple[int, int]] = {
-            pool.submit(_run_chunk, seed, a, b): (a, b) for a, b in _chunks(trials, workers)
-        }
-        while pending:
-            finished, _ = wait(pending, return_when=FIRST_COMPLETED)
-            for future in finished:
-                a, b = pending.pop(future)
-                results[a:b] = future.result()
-                done += b - a
-                if progress is not None:
-                    progress(done, trials)
-    assert all(r is not None for r in results)
-    return [r for r in results if r is not None]
+    The same draw as :func:`run_trial` (the world's stream of :func:`trial_seed`), so a failing
+    trial can be reported with the errors that made it fail.
+    """
+    world_seed, _ = trial_seed(seed, index).spawn(2)
+    world = sample_world(context.graph, np.random.default_rng(world_seed))
+    return {frame: dict(values) for frame, values in world.parameters.items()}
 
 
 def replay(
@@ -315,24 +264,21 @@ def replay(
         distribution=distribution,
     )
     nominal = run_nominal(context)
-    runs: list[RunReport]
-    if trials and workers > 1:
-        runs = _monte_carlo_parallel(
-            program_text,
-            context,
-            filename,
-            None if base_dir is None else str(base_dir),
-            trials,
-            seed,
-            workers,
-            progress,
-        )
-    else:
-        runs = []
-        for i in range(trials):
-            runs.append(run_trial(context, seed, i))
+    spec = task if isinstance(task, TaskSpec) else load_task(task)
+    job = job_for(
+        program_text,
+        spec,
+        filename=filename,
+        base_dir=base_dir,
+        options=options,
+        distribution=distribution,
+    )
+    runs: list[RunReport] = []
+    with TrialPool(min(workers, max(trials, 1))) as pool:
+        for run in iter_trials(job, context, seed, trials, pool):
+            runs.append(run)
             if progress is not None:
-                progress(i + 1, trials)
+                progress(len(runs), trials)
     return ReplayReport(filename, context.spec.name, nominal, summarise(runs, seed), tuple(runs))
 
 

@@ -32,7 +32,7 @@ true world equals the program's beliefs.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
@@ -85,6 +85,8 @@ class TrueWorld:
     world_from: Mapping[str, pin.SE3]
     link_errors: Mapping[str, pin.SE3]
     nominal: bool
+    parameters: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
+    """The sampled error parameters per perturbed frame [m, rad]: ``{frame: {"x": …}}``."""
 
     def pose(self, frame: str) -> pin.SE3:
         """True world pose of ``frame`` [m] (a copy)."""
@@ -130,7 +132,11 @@ def sample_world(graph: AttributeGraph, rng: np.random.Generator) -> TrueWorld:
         b.owner: link_error(b.names, v[space.block_slice(b.owner)])
         for b in blocks  # owners are distinct frame names
     }
-    return TrueWorld(_compose(graph, errors), errors, nominal=False)
+    parameters = {
+        b.owner: dict(zip(b.names, map(float, v[space.block_slice(b.owner)]), strict=True))
+        for b in blocks
+    }
+    return TrueWorld(_compose(graph, errors), errors, nominal=False, parameters=parameters)
 
 
 class HandErrors:

@@ -81,3 +81,7 @@ class PlanOptions:
     tap_hand_errors: HandErrorModel = "independent"
     """How the hand errors at the tap and at the insertion relate: ``independent`` blocks
     (conservative) or one ``repeatable`` block (a calibration error that the tap cancels)."""
+    try_harder: bool = False
+    """Keep every grasp orientation ω with an arm solution, not the best three (L2122)."""
+    exhaustive: bool = False
+    """Refine every candidate instead of stopping at the best-first cutoff (L2463)."""

@@ -12,12 +12,15 @@ A pure function of the task and the options, except for ``planning_time`` (wall 
 
 from __future__ import annotations
 
+import dataclasses
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 from synth.exceptions import NoStrategyError
 from synth.models.spec import TaskSpec
 from synth.strategies.approach import Candidate, plan_approach
+from synth.strategies.causes import root_cause
 from synth.strategies.context import build_context
 from synth.strategies.grasp import generate_pickups
 from synth.strategies.options import PlanOptions
@@ -25,53 +28,96 @@ from synth.strategies.records import PinInHoleStrategy, PlanResult, Rejection
 from synth.strategies.refine import Refined, minimum_refinement_cost, refine
 from synth.strategies.select import select_strategy
 
+Accept = Callable[[PinInHoleStrategy], Rejection | None]
+"""A last check of a chosen strategy (the pipeline's proof): ``None`` accepts it, a
+:class:`Rejection` sends the search on to the next best candidate."""
+
+
+def _at_stage(rejection: Rejection, stage: str) -> Rejection:
+    return rejection if rejection.stage else dataclasses.replace(rejection, stage=stage)
+
 
 def plan_task(
     spec: TaskSpec,
     *,
-    try_harder: bool = False,
-    exhaustive: bool = False,
     options: PlanOptions | None = None,
     base_dir: Path | str | None = None,
+    accept: Accept | None = None,
 ) -> PlanResult:
     """Plan a pin-in-hole task; raise :class:`~synth.exceptions.NoStrategyError` if none works.
 
-    ``try_harder`` keeps every ω with an arm solution instead of the best three (L2122);
-    ``exhaustive`` refines every candidate instead of stopping at the best-first cutoff
-    (L2463). ``base_dir`` resolves a URDF arm's relative paths (the task file's directory).
+    ``options.try_harder`` keeps every ω with an arm solution instead of the best three
+    (L2122); ``options.exhaustive`` refines every candidate instead of stopping at the
+    best-first cutoff (L2463). ``base_dir`` resolves a URDF arm's relative paths (the task
+    file's directory).
+
+    ``accept`` is asked about the best refined strategy; when it rejects it, that candidate
+    is dropped and best-first selection runs again over the rest (refinements are kept, so a
+    candidate is refined at most once). The planner stays a pure function: what ``accept``
+    checks (the pipeline emits and proves the program) is not the planner's business.
     """
     start = time.perf_counter()
     ctx = build_context(spec, options, base_dir)
-    pickups, rejected = generate_pickups(ctx, try_harder=try_harder)
+    pickups, dropped = generate_pickups(ctx, try_harder=ctx.options.try_harder)
+    rejected = [_at_stage(r, "pickup") for r in dropped]
     candidates: list[Candidate] = []
     for pickup in pickups:
         made = plan_approach(ctx, pickup)
         if isinstance(made, Rejection):
-            rejected.append(made)
+            rejected.append(_at_stage(made, "approach"))
         else:
             candidates.append(made)
     lower_bound = minimum_refinement_cost(ctx, candidates)
-    selection = select_strategy(
-        candidates,
-        cost=lambda c: c.cost,
-        refine=lambda c: refine(ctx, c),
-        refined_cost=lambda r: r.strategy.goodness,
-        minimum_refinement_cost=lower_bound,
-        exhaustive=exhaustive,
+    refinements: dict[int, Refined | Rejection] = {}
+
+    def refine_once(candidate: Candidate) -> Refined | Rejection:
+        key = id(candidate)
+        if key not in refinements:
+            refinements[key] = refine(ctx, candidate)
+        return refinements[key]
+
+    exhaustive = ctx.options.exhaustive
+    remaining = list(candidates)
+    refused: list[Rejection] = []  # by ``accept``, in the order it refused them
+    accept_time = 0.0  # [s] spent in ``accept``: not planning time
+    while True:
+        selection = select_strategy(
+            remaining,
+            cost=lambda c: c.cost,
+            refine=refine_once,
+            refined_cost=lambda r: r.strategy.goodness,
+            minimum_refinement_cost=lower_bound,
+            exhaustive=exhaustive,
+        )
+        best: Refined | None = selection.best
+        if best is None or accept is None:
+            break
+        checked = time.perf_counter()
+        verdict = accept(best.strategy)
+        accept_time += time.perf_counter() - checked
+        if verdict is None:
+            break
+        refused.append(_at_stage(verdict, "proof"))
+        remaining = [c for c in remaining if c is not best.candidate]
+    rejected.extend(
+        _at_stage(r, "refine") for r in refinements.values() if isinstance(r, Rejection)
     )
-    rejected.extend(selection.rejected)
-    if selection.best is None:
-        raise NoStrategyError(spec.name, tuple((r.candidate, r.reason) for r in rejected))
-    best: Refined = selection.best
-    listed: list[PinInHoleStrategy] = [r.strategy for r in selection.refined]
+    rejected.extend(refused)
+    if best is None:
+        raise NoStrategyError(spec.name, tuple(rejected), root_cause(rejected))
+    refined = [r for r in refinements.values() if isinstance(r, Refined)]
+    refused_names = {r.candidate for r in refused}
+    listed: list[PinInHoleStrategy] = [
+        r.strategy for r in refined if r.strategy.name not in refused_names
+    ]
     listed += [c.strategy for c in selection.unrefined]
     listed.sort(key=lambda s: (not s.refined, s.goodness))
     return PlanResult(
         strategy=best.strategy,
         candidates=tuple(listed),
         rejected=tuple(rejected),
-        refined=selection.count,
-        planning_time=time.perf_counter() - start,
+        refined=len(refinements),
+        planning_time=time.perf_counter() - start - accept_time,
         counters=ctx.counters.as_dict(),
         mode="exhaustive" if exhaustive else "best-first",
         minimum_refinement_cost=lower_bound,

@@ -349,14 +349,33 @@ class PinInHoleStrategy:
 
 @dataclass(frozen=True)
 class Rejection:
-    """A candidate the planner dropped, and why (shown by ``synth plan``)."""
+    """A candidate the planner dropped, and why (shown by ``synth plan``).
+
+    ``cause`` is one of :data:`synth.strategies.causes.CAUSES` (``None``: read from the reason
+    by :func:`~synth.strategies.causes.classify`); ``stage`` the planning stage that dropped it
+    (``pickup``, ``approach``, ``refine``, ``proof``; the planner fills it in).
+    """
 
     candidate: str
     reason: str
+    cause: str | None = None
+    stage: str | None = None
 
-    def to_json(self) -> dict[str, str]:
+    @property
+    def kind(self) -> str:
+        """The cause: the one given, or the one the reason's wording names."""
+        from synth.strategies.causes import classify
+
+        return self.cause if self.cause is not None else classify(self.reason)
+
+    def to_json(self) -> dict[str, str | None]:
         """JSON form."""
-        return {"candidate": self.candidate, "reason": self.reason}
+        return {
+            "candidate": self.candidate,
+            "reason": self.reason,
+            "cause": self.kind,
+            "stage": self.stage,
+        }
 
 
 @dataclass(frozen=True, eq=False)

@@ -1,0 +1,343 @@
+"""The proof of a program: its nominal replay, then a sequential Monte Carlo test.
+
+A program is *proven* for a task when
+
+1. its nominal run (the true world equal to the program's beliefs) succeeds, and
+2. its success rate over ``trials`` sampled true worlds is at least ``min_success``.
+
+**What is compared.** The observed success *rate* k/n over the full budget of n = ``trials``
+trials is compared with ``min_success``: a fixed-size test that allows
+``floor((1 − min_success)·n + 1e-9)`` failures. The test stops as soon as its verdict is
+decided, which leaves that verdict unchanged:
+
+* *curtailed failure*: the failures already exceed the allowance, so no later trial can save
+  the program (at the default 0.99 over 100 trials: the second failure ends the proof);
+* *early failure on the Wilson bound*: after at least :data:`MIN_TRIALS_FOR_BOUND` trials the
+  95% Wilson upper bound of the rate is below ``min_success``: the program is clearly worse
+  than required (this can reject a program that would have scraped through the full budget;
+  it never accepts one);
+* *early success on the Wilson bound*: the 95% Wilson lower bound is at or above
+  ``min_success`` (with 0.99 this needs 380 straight successes, so it only shortens large
+  proofs).
+
+The verdict is reproducible: the trials are consumed in trial order
+(:func:`~synth.replay.trials.iter_trials`) and each is a function of (program, task, seed,
+index), so the prefix the rule decides on is the same for any number of workers.
+
+A failed proof carries the replay's reason: the outcome kind, the AL line, the message (which
+names the bodies of a collision) and the error parameters sampled in the first failing trial.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from synth.models.spec import Distribution, TaskSpec
+from synth.replay.machine import ReplayOptions
+from synth.replay.report import OUTCOMES, RunReport, wilson_interval
+from synth.replay.run import build_context, run_nominal, trial_errors
+from synth.replay.trials import TrialPool, iter_trials, job_for
+
+__all__ = [
+    "DEFAULT_MIN_SUCCESS",
+    "DEFAULT_PROOF_TRIALS",
+    "MIN_TRIALS_FOR_BOUND",
+    "FailedTrial",
+    "Proof",
+    "ProofOptions",
+    "prove",
+]
+
+DEFAULT_PROOF_TRIALS = 100
+"""Monte Carlo trials of a proof by default: on seed_4_8 they take about 3 s on 2 cores
+(benchmarks/proof.py), so ``synth plan`` stays interactive, and at 0.99 they allow one failure."""
+DEFAULT_MIN_SUCCESS = 0.99
+"""Required success rate by default."""
+MIN_TRIALS_FOR_BOUND = 20
+"""The Wilson upper bound may end a proof early only after this many trials."""
+Z_95 = 1.959963984540054
+"""Φ⁻¹(0.975): the two-sided 95% Wilson interval."""
+
+Decision = Literal["nominal", "budget", "curtailed", "wilson-upper", "wilson-lower", "nominal-only"]
+Progress = Callable[[int, int], None]
+
+
+@dataclass(frozen=True)
+class ProofOptions:
+    """How a program is proven.
+
+    ``trials``: Monte Carlo budget (0: the nominal run only); ``min_success``: required rate
+    [1]; ``seed``: seed of the trials; ``workers``: processes (None: one per CPU core);
+    ``distribution`` overrides every error block's sampling (seed ch. IX).
+    """
+
+    trials: int = DEFAULT_PROOF_TRIALS
+    min_success: float = DEFAULT_MIN_SUCCESS
+    seed: int = 0
+    workers: int | None = 1
+    distribution: Distribution | None = None
+
+    def __post_init__(self) -> None:
+        if self.trials < 0:
+            raise ValueError(f"proof trials must be ≥ 0, got {self.trials}")
+        if not 0.0 <= self.min_success <= 1.0:
+            raise ValueError(f"min_success must lie in [0, 1], got {self.min_success}")
+
+    @classmethod
+    def for_task(
+        cls,
+        spec: TaskSpec,
+        *,
+        trials: int | None = None,
+        min_success: float | None = None,
+        seed: int = 0,
+        workers: int | None = 1,
+        distribution: Distribution | None = None,
+    ) -> ProofOptions:
+        """Options for ``spec``, each field as given, else the task's, else the default.
+
+        ``trials`` and ``min_success`` fall back on the task's ``proof`` section, then on
+        :data:`DEFAULT_PROOF_TRIALS` and :data:`DEFAULT_MIN_SUCCESS`.
+        """
+        section = spec.proof
+        if trials is None:
+            trials = section.trials if section is not None else None
+        if min_success is None:
+            min_success = section.min_success if section is not None else None
+        return cls(
+            trials=DEFAULT_PROOF_TRIALS if trials is None else trials,
+            min_success=DEFAULT_MIN_SUCCESS if min_success is None else min_success,
+            seed=seed,
+            workers=workers,
+            distribution=distribution,
+        )
+
+    @property
+    def allowed_failures(self) -> int:
+        """Failures the full budget tolerates: ⌊(1 − min_success)·trials⌋."""
+        return math.floor((1.0 - self.min_success) * self.trials + 1e-9)
+
+
+@dataclass(frozen=True)
+class FailedTrial:
+    """The first trial that failed: its index, outcome, AL line, message and sampled errors.
+
+    ``errors`` maps each perturbed frame to its sampled error parameters [m, rad].
+    """
+
+    index: int
+    outcome: str
+    line: int | None
+    message: str
+    errors: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
+
+    def describe(self) -> str:
+        """``trial 7: abort at AL line 31: ... (sampled box x=+0.61 cm, rz=−4.2°)``."""
+        where = f" at AL line {self.line}" if self.line is not None else ""
+        parts = []
+        for frame, values in self.errors.items():
+            shown = ", ".join(
+                f"{k}={100 * v:+.2f} cm" if k in ("x", "y", "z") else f"{k}={math.degrees(v):+.2f}°"
+                for k, v in values.items()
+            )
+            parts.append(f"{frame} {shown}")
+        sampled = f" (sampled {'; '.join(parts)})" if parts else ""
+        return f"trial {self.index}: {self.outcome}{where}: {self.message}{sampled}"
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON form (SI units)."""
+        return {
+            "index": self.index,
+            "outcome": self.outcome,
+            "line": self.line,
+            "message": self.message,
+            "errors": {f: dict(v) for f, v in self.errors.items()},
+        }
+
+
+@dataclass(frozen=True)
+class Proof:
+    """The outcome of proving one program (see the module docstring).
+
+    ``trials`` counts the trials the test consumed (≤ the budget in ``options``),
+    ``successes`` those that succeeded; ``decided_by`` names the rule that ended the test;
+    ``outcomes`` counts the trials per outcome; ``time_mean``/``time_p95`` [s] the simulated
+    program time over the trials (the nominal run's when there were none).
+    """
+
+    options: ProofOptions
+    nominal: RunReport
+    trials: int
+    successes: int
+    passed: bool
+    decided_by: Decision
+    outcomes: Mapping[str, int] = field(default_factory=dict)
+    time_mean: float = 0.0
+    time_p95: float = 0.0
+    first_failure: FailedTrial | None = None
+
+    @property
+    def rate(self) -> float | None:
+        """Successes over trials (None without trials)."""
+        return self.successes / self.trials if self.trials else None
+
+    @property
+    def interval(self) -> tuple[float, float]:
+        """The 95% Wilson interval of the success rate."""
+        return wilson_interval(self.successes, self.trials, Z_95)
+
+    def reason(self) -> str:
+        """Why the proof failed, in one line (empty when it passed)."""
+        if self.passed:
+            return ""
+        n = self.nominal
+        if not n.success:
+            where = f" at AL line {n.line}" if n.line is not None else ""
+            return f"nominal replay failed: {n.outcome}{where}: {n.message}"
+        lo, hi = self.interval
+        rate = 100 * (self.rate or 0.0)
+        head = (
+            f"replay proof failed: {self.successes} of {self.trials} trials succeeded "
+            f"({rate:.1f}%, Wilson 95% {100 * lo:.1f}–{100 * hi:.1f}%) where "
+            f"{100 * self.options.min_success:g}% are required ({self.decided_by})"
+        )
+        if self.first_failure is None:
+            return head
+        return f"{head}; first failure {self.first_failure.describe()}"
+
+    def summary(self) -> str:
+        """One line for a plan summary."""
+        if self.options.trials == 0:
+            verdict = "passed" if self.passed else "FAILED"
+            return f"nominal replay {verdict} ({self.nominal.time:.2f} s simulated); no trials"
+        lo, hi = self.interval
+        verdict = "proven" if self.passed else "NOT proven"
+        rate = 100 * (self.rate or 0.0)
+        return (
+            f"{verdict}: {self.successes} of {self.trials} replayed trials succeeded "
+            f"({rate:.1f}%, Wilson 95% {100 * lo:.1f}–{100 * hi:.1f}%; required "
+            f"{100 * self.options.min_success:g}%, stopped by {self.decided_by}); "
+            f"simulated time mean {self.time_mean:.2f} s, p95 {self.time_p95:.2f} s"
+        )
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON form (SI units)."""
+        lo, hi = self.interval
+        return {
+            "passed": self.passed,
+            "nominal": self.nominal.to_json(),
+            "trials": self.trials,
+            "budget": self.options.trials,
+            "successes": self.successes,
+            "success_rate": self.rate,
+            "wilson_95": [lo, hi],
+            "min_success": self.options.min_success,
+            "seed": self.options.seed,
+            "decided_by": self.decided_by,
+            "outcomes": dict(self.outcomes),
+            "time": {"mean": self.time_mean, "p95": self.time_p95},
+            "first_failure": None if self.first_failure is None else self.first_failure.to_json(),
+        }
+
+
+def _decide(options: ProofOptions, successes: int, n: int) -> Decision | None:
+    """The rule that decides after ``n`` trials with ``successes``, or None to go on."""
+    if n - successes > options.allowed_failures:
+        return "curtailed"
+    lo, hi = wilson_interval(successes, n, Z_95)
+    if n >= MIN_TRIALS_FOR_BOUND and hi < options.min_success:
+        return "wilson-upper"
+    if lo >= options.min_success:
+        return "wilson-lower"
+    if n >= options.trials:
+        return "budget"
+    return None
+
+
+def prove(
+    program_text: str,
+    task: TaskSpec,
+    options: ProofOptions | None = None,
+    *,
+    base_dir: str | Path | None = None,
+    replay_options: ReplayOptions | None = None,
+    pool: TrialPool | None = None,
+    progress: Progress | None = None,
+) -> Proof:
+    """Prove ``program_text`` on ``task`` (see the module docstring).
+
+    ``pool`` runs the trials (shared between proofs; without one a pool of
+    ``options.workers`` is made for this proof). ``progress(done, budget)`` is called after
+    each trial. Raises ALSyntaxError or SpecError for a program or task the replay cannot use.
+    """
+    opts = options or ProofOptions()
+    context = build_context(
+        program_text,
+        task,
+        base_dir=base_dir,
+        options=replay_options,
+        distribution=opts.distribution,
+    )
+    nominal = run_nominal(context)
+    if not nominal.success:
+        return Proof(opts, nominal, 0, 0, False, "nominal", {}, nominal.time, nominal.time)
+    if opts.trials == 0:
+        return Proof(opts, nominal, 0, 0, True, "nominal-only", {}, nominal.time, nominal.time)
+    job = job_for(
+        program_text,
+        task,
+        base_dir=base_dir,
+        options=replay_options,
+        distribution=opts.distribution,
+    )
+    own_pool = pool is None
+    active = pool if pool is not None else TrialPool(opts.workers)
+    runs: list[RunReport] = []
+    first: tuple[int, RunReport] | None = None
+    decision: Decision | None = None
+    try:
+        trials = iter_trials(job, context, opts.seed, opts.trials, active)
+        for run in trials:
+            runs.append(run)
+            if first is None and not run.success:
+                first = (len(runs) - 1, run)
+            if progress is not None:
+                progress(len(runs), opts.trials)
+            successes = sum(r.success for r in runs)
+            decision = _decide(opts, successes, len(runs))
+            if decision is not None:
+                trials.close()
+                break
+    finally:
+        if own_pool:
+            active.close()
+    assert decision is not None
+    successes = sum(r.success for r in runs)
+    counts = Counter(r.outcome for r in runs)
+    times = np.array([r.time for r in runs])
+    failed = None
+    if first is not None:
+        index, run = first
+        failed = FailedTrial(
+            index, run.outcome, run.line, run.message, trial_errors(context, opts.seed, index)
+        )
+    return Proof(
+        options=opts,
+        nominal=nominal,
+        trials=len(runs),
+        successes=successes,
+        # At the budget the failures are within the allowance (else "curtailed" had fired).
+        passed=decision in ("budget", "wilson-lower"),
+        decided_by=decision,
+        outcomes={o: counts[o] for o in OUTCOMES if counts[o]},
+        time_mean=float(np.mean(times)),
+        time_p95=float(np.percentile(times, 95)),
+        first_failure=failed,
+    )

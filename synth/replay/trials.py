@@ -1,0 +1,184 @@
+"""Monte Carlo trials in trial order, in this process or in a pool of worker processes.
+
+:func:`iter_trials` yields trial i's :class:`~synth.replay.report.RunReport` for i = 0, 1, …
+in that order, whatever order the workers finish in, so a consumer that stops early (the
+proof's sequential test, :mod:`synth.replay.proof`) sees the same prefix for any number of
+workers: a trial's outcome depends only on (program, task, seed, i) (:func:`run_trial`).
+Closing the iterator cancels the trials not yet started.
+
+A :class:`TrialPool` is a process pool (``spawn`` start method) that several replays can
+share: each worker builds a program's :class:`~synth.replay.run.ReplayContext` once, keyed by
+the program text, the task and the options, and keeps the last few, so proving one candidate
+after another pays the workers' start-up (imports, arm model, meshes) once.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import multiprocessing
+import os
+from collections import OrderedDict, deque
+from collections.abc import Generator
+from concurrent.futures import Future, ProcessPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from synth.models.spec import Distribution, TaskSpec
+from synth.replay.machine import ReplayOptions
+from synth.replay.report import RunReport
+
+__all__ = ["TrialJob", "TrialPool", "iter_trials", "job_for"]
+
+_CHUNK = 4
+"""Trials per task sent to a worker: small, so an early stop wastes little."""
+_AHEAD = 3
+"""Chunks in flight per worker."""
+_CACHED_CONTEXTS = 4
+"""Replay contexts a worker keeps (one per program proven recently)."""
+
+
+@dataclass(frozen=True)
+class TrialJob:
+    """What a worker needs to rebuild a replay context: the program and its task.
+
+    ``spec`` is the task as parsed (contact-located objects are resolved by the worker, as by
+    :func:`~synth.replay.run.build_context`); ``base_dir`` resolves URDF paths.
+    """
+
+    program_text: str
+    spec: TaskSpec
+    filename: str = "<al>"
+    base_dir: str | None = None
+    options: ReplayOptions | None = None
+    distribution: Distribution | None = None
+
+    @property
+    def key(self) -> str:
+        """A digest of everything that makes the context."""
+        digest = hashlib.sha256()
+        for part in (
+            self.program_text,
+            self.spec.model_dump_json(),
+            self.filename,
+            str(self.base_dir),
+            repr(self.options),
+            str(self.distribution),
+        ):
+            digest.update(part.encode())
+            digest.update(b"\0")
+        return digest.hexdigest()
+
+
+_CONTEXTS: OrderedDict[str, Any] = OrderedDict()
+
+
+def _context(job: TrialJob) -> Any:
+    from synth.replay.run import build_context
+
+    key = job.key
+    if key in _CONTEXTS:
+        _CONTEXTS.move_to_end(key)
+        return _CONTEXTS[key]
+    context = build_context(
+        job.program_text,
+        job.spec,
+        filename=job.filename,
+        base_dir=job.base_dir,
+        options=job.options,
+        distribution=job.distribution,
+    )
+    _CONTEXTS[key] = context
+    while len(_CONTEXTS) > _CACHED_CONTEXTS:
+        _CONTEXTS.popitem(last=False)
+    return context
+
+
+def _run_chunk(job: TrialJob, seed: int, start: int, stop: int) -> list[RunReport]:
+    from synth.replay.run import run_trial
+
+    context = _context(job)
+    return [run_trial(context, seed, i) for i in range(start, stop)]
+
+
+class TrialPool:
+    """A pool of ``workers`` processes for Monte Carlo trials, started on first use.
+
+    Use it as a context manager, or call :meth:`close`. ``workers=None`` takes one per CPU.
+    """
+
+    def __init__(self, workers: int | None = None) -> None:
+        self.workers = max(1, workers if workers is not None else (os.cpu_count() or 1))
+        self._executor: ProcessPoolExecutor | None = None
+
+    def executor(self) -> ProcessPoolExecutor:
+        """The process pool (started now if it is not yet)."""
+        if self._executor is None:
+            self._executor = ProcessPoolExecutor(
+                max_workers=self.workers, mp_context=multiprocessing.get_context("spawn")
+            )
+        return self._executor
+
+    def close(self) -> None:
+        """Stop the workers; trials not yet started are cancelled."""
+        if self._executor is not None:
+            self._executor.shutdown(wait=True, cancel_futures=True)
+            self._executor = None
+
+    def __enter__(self) -> TrialPool:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def iter_trials(
+    job: TrialJob,
+    context: Any,
+    seed: int,
+    count: int,
+    pool: TrialPool | None = None,
+) -> Generator[RunReport, None, None]:
+    """Trials 0 … count−1 of ``job`` in trial order (see the module docstring).
+
+    ``context`` is the caller's own :class:`~synth.replay.run.ReplayContext` of ``job``: the
+    trials run in it when ``pool`` is None or has one worker.
+    """
+    if pool is None or pool.workers == 1 or count <= _CHUNK:
+        from synth.replay.run import run_trial
+
+        for i in range(count):
+            yield run_trial(context, seed, i)
+        return
+    executor = pool.executor()
+    chunks = deque((a, min(a + _CHUNK, count)) for a in range(0, count, _CHUNK))
+    in_flight: deque[Future[list[RunReport]]] = deque()
+    try:
+        while chunks or in_flight:
+            while chunks and len(in_flight) < _AHEAD * pool.workers:
+                a, b = chunks.popleft()
+                in_flight.append(executor.submit(_run_chunk, job, seed, a, b))
+            yield from in_flight.popleft().result()
+    finally:
+        for future in in_flight:
+            future.cancel()
+
+
+def job_for(
+    program_text: str,
+    spec: TaskSpec,
+    *,
+    filename: str = "<al>",
+    base_dir: str | Path | None = None,
+    options: ReplayOptions | None = None,
+    distribution: Distribution | None = None,
+) -> TrialJob:
+    """The :class:`TrialJob` of a replay's arguments (``base_dir`` as a string)."""
+    return TrialJob(
+        program_text,
+        spec,
+        filename,
+        None if base_dir is None else str(base_dir),
+        options,
+        distribution,
+    )
