@@ -20,6 +20,8 @@ from synth.models.jamming import clearance_ratio, fit_problem, wedging_tilt
 from synth.models.loader import load_task, parse_task
 from synth.models.workcell import NominalPoses, WorkcellModel
 from synth.replay.contact import first_contact
+from synth.replay.run import build_context, run_world
+from synth.replay.truth import HandErrors, TrueWorld, nominal_world
 from synth.replay.wedging import two_point_depth, wedges, wedging_onset
 
 SEED = Path(__file__).resolve().parent.parent / "fixtures" / "tasks" / "seed_4_8.yaml"
@@ -120,3 +122,26 @@ def test_replay_wedges_a_pin_entering_beyond_the_onset(seed_cell, tilt_deg, kind
     found = first_contact(model, pose_at, 0.015, cell.obstacles, cell.holes, friction=cell.friction)
     assert found is not None and found.kind == kind and found.hole is hole
     assert cell.friction == MU
+
+
+def _box_tilted(graph: AttributeGraph, degrees: float) -> TrueWorld:
+    """The believed world with the box (and its top and holes) turned about its x axis."""
+    poses = dict(nominal_world(graph).world_from)
+    box = poses["box"]
+    tilted = box * pin.SE3(pin.utils.rotate("x", math.radians(degrees)), np.zeros(3))
+    for name in ("box", "box_top", "bh1", "bh2", "bh3", "bh4"):
+        poses[name] = tilted * box.actInv(poses[name])
+    return TrueWorld(poses, {}, nominal=False)
+
+
+@pytest.mark.parametrize(("degrees", "outcome"), [(1.0, "success"), (2.5, "violation")])
+def test_the_seed_program_wedges_in_a_box_tilted_past_the_onset(degrees, outcome) -> None:  # type: ignore[no-untyped-def]
+    # the held pin stays vertical, so its tilt at entry is the box's: 1.0° is below the replay's
+    # onset 1.576°, 2.5° above it
+    program = (SEED.parent.parent / "golden" / "seed_4_8.al").read_text(encoding="utf-8")
+    context = build_context(program, SEED)
+    report = run_world(context, _box_tilted(context.graph, degrees), HandErrors.none())
+    assert report.outcome == outcome
+    if outcome == "violation":
+        assert report.message.startswith("wedged: PIN1 wedged in BH1: it entered tilted 2.50°")
+        assert report.violations[0].kind == "wedged"
