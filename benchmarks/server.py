@@ -75,18 +75,15 @@ def in_process(text: str, duration: float, trials: int | None) -> Level:
 
     The same work as one request; ``trials`` None: no replay.
     """
-    from synth.codegen.emitter import emit_program
-    from synth.errors.locate import believed_graph
     from synth.models.loader import parse_task
+    from synth.pipeline import SynthesisOptions, synthesize
+    from synth.replay.proof import ProofOptions
 
-    planner = importlib.import_module("synth.strategies.planner")
-    replay = importlib.import_module("synth.replay") if trials is not None else None
+    # The server's plan job: the pipeline with its proof on one worker (trials None: nominal).
+    options = SynthesisOptions(proof=ProofOptions(trials=trials or 0, workers=1))
 
     def once() -> None:
-        spec = parse_task(unique_spec(text).decode())
-        program = emit_program(planner.plan_task(spec).strategy, believed_graph(spec))
-        if replay is not None:
-            replay.replay_program(program, spec, trials=trials, seed=0)
+        synthesize(parse_task(unique_spec(text).decode()), options)
 
     once()  # warm-up (imports, caches)
     latencies: list[float] = []

@@ -1,11 +1,11 @@
 #!/usr/bin/env python3
 """Regenerate the golden AL programs ``fixtures/golden/<task>.al`` — the only way they change.
 
-For each task in :data:`TASKS` (``fixtures/tasks/<task>.yaml``) the strategy comes from
-``synth.strategies.planner.plan_task`` when that module exists (``--source auto``, the
-default), otherwise from the seed's hand-built records (``tests/data/seed_strategies.py``,
-seed §4.8 L2690–2844); the program is :func:`synth.codegen.emitter.emit_program` without
-preamble. The source used is recorded in ``fixtures/golden/manifest.json``, and
+For each task in :data:`TASKS` (``fixtures/tasks/<task>.yaml``) the program is the one
+:func:`synth.pipeline.synthesize` proves (``--source auto``, the default, when the planner
+exists), otherwise the emission of the seed's hand-built records
+(``tests/data/seed_strategies.py``, seed §4.8 L2690–2844), without preamble. The source used
+is recorded in ``fixtures/golden/manifest.json``, and
 ``tests/test_codegen.py`` regenerates with :func:`golden_program` from the recorded source, so
 golden files written from the seed's records stay valid while the planner is being built, and
 switching them to the planner is one reviewed run of this script.
@@ -76,22 +76,32 @@ def golden_strategy(task: str, source: str = "auto") -> tuple[Any, Any]:
     from synth.models.loader import load_task
 
     path = TASKS_DIR / f"{task}.yaml"
-    spec = load_task(path)
     if resolve_source(source) == "planner":
-        from synth.strategies.planner import plan_task
+        synthesis = _synthesis(path)
+        return synthesis.strategy, synthesis.graph
+    return seed_records().STRATEGIES[task](), believed_graph(load_task(path))
 
-        strategy = plan_task(spec, base_dir=path.parent).strategy
-    else:
-        strategy = seed_records().STRATEGIES[task]()
-    return strategy, believed_graph(spec)
+
+def _synthesis(path: Path) -> Any:
+    """The pipeline's proven program for ``path`` (nominal proof: goldens stay fast to check)."""
+    from synth.pipeline import SynthesisOptions, synthesize
+    from synth.replay.proof import ProofOptions
+
+    return synthesize(path, SynthesisOptions(proof=ProofOptions(trials=0)))
 
 
 def golden_program(task: str, source: str = "auto") -> str:
-    """The AL program the golden file ``fixtures/golden/<task>.al`` must hold."""
+    """The AL program the golden file ``fixtures/golden/<task>.al`` must hold.
+
+    From the planner: the program :func:`synth.pipeline.synthesize` proves and writes; from
+    the seed's records: :func:`synth.codegen.emitter.emit_program` of the hand-built record.
+    """
+    if resolve_source(source) == "planner":
+        return str(_synthesis(TASKS_DIR / f"{task}.yaml").program)
     from synth.codegen.emitter import emit_program
 
     strategy, graph = golden_strategy(task, source)
-    return emit_program(strategy, graph)
+    return str(emit_program(strategy, graph))
 
 
 def main(argv: list[str] | None = None) -> int:

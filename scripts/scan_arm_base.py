@@ -46,16 +46,17 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:  # run from a checkout without installing synth
     sys.path.insert(0, str(ROOT))
 
-from synth.codegen.emitter import emit_program  # noqa: E402
 from synth.exceptions import SynthError  # noqa: E402
 from synth.models.arm import Arm, load_arm  # noqa: E402
 from synth.models.graph import AttributeGraph, pose_to_se3  # noqa: E402
 from synth.models.loader import load_task  # noqa: E402
 from synth.models.spec import Pose, TaskSpec  # noqa: E402
+from synth.pipeline import SynthesisOptions, synthesize  # noqa: E402
 from synth.replay import replay  # noqa: E402
-from synth.strategies.planner import plan_task  # noqa: E402
+from synth.replay.proof import ProofOptions  # noqa: E402
 
 TASKS_DIR = ROOT / "fixtures" / "tasks"
+NOMINAL_PROOF = SynthesisOptions(proof=ProofOptions(trials=0))
 LISTINGS_DIR = ROOT / "tests" / "data" / "al"
 LISTINGS: tuple[tuple[str, str], ...] = (
     ("seed_4_8", "seed_4_8_search.al"),
@@ -145,13 +146,10 @@ def replays(x: float, y: float, yaw: float) -> dict[str, Any]:
                 return out
         for task in PLANNED:
             spec = with_base(load_task(TASKS_DIR / f"{task}.yaml"), x, y, yaw)
-            strategy = plan_task(spec, base_dir=TASKS_DIR).strategy
+            # The pipeline writes only a program whose nominal replay succeeds (else it raises).
+            synthesis = synthesize(spec, NOMINAL_PROOF, base_dir=TASKS_DIR)
+            strategy = synthesis.strategy
             out["planned"][task] = f"{strategy.name}, {strategy.goodness:.2f} s"
-            program = emit_program(strategy, AttributeGraph(spec))
-            run = replay(program, spec, filename=f"{task}.al", base_dir=TASKS_DIR).nominal
-            if run.outcome != "success":
-                out["failure"] = f"plan {task}: {run.outcome} at line {run.line}: {run.message}"
-                return out
     except SynthError as exc:
         out["failure"] = f"{type(exc).__name__}: {exc}"
     return out

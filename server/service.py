@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import yaml
 
 import synth
-from server.exceptions import NotFound, ReplayUnavailable, StageUnavailable, UnsupportedMediaType
+from server.exceptions import NotFound, ReplayUnavailable, UnsupportedMediaType
 from server.modelpaths import confine_model_files
 from server.settings import Settings
 from server.workers import WorkerPool
@@ -216,31 +216,34 @@ def _replay(program: str, spec: TaskSpec, trials: int, seed: int) -> dict[str, A
 def plan_job(
     body: bytes, kind: SpecKind, options: dict[str, Any], model_dirs: tuple[str, ...]
 ) -> dict[str, Any]:
-    """Parse, plan, emit and (unless ``options["validate"]`` is false) replay one task."""
-    spec = _spec_for_server(body, kind, model_dirs)
-    planner = _stage("synth.strategies.planner")
-    emitter = _stage("synth.codegen.emitter")
-    if planner is None or emitter is None:
-        raise StageUnavailable(
-            "planning not available in this build: "
-            + ", ".join(m for m, s in (("planner", planner), ("codegen", emitter)) if s is None)
-            + " missing"
-        )
-    from synth.errors.locate import believed_graph
+    """Parse one task and take it to a proven program (:func:`synth.pipeline.synthesize`).
 
-    result = planner.plan_task(
-        spec, try_harder=options["try_harder"], exhaustive=options["exhaustive"]
+    The proof runs ``options["trials"]`` Monte Carlo trials (none when ``validate`` is false:
+    the nominal replay still proves the program); ``validation`` is the proof in the replay
+    report's shape, so it can be compared with ``POST /v1/replays``.
+    """
+    spec = _spec_for_server(body, kind, model_dirs)
+    from synth.pipeline import SynthesisOptions, synthesize
+    from synth.replay.proof import ProofOptions
+    from synth.strategies.options import PlanOptions as PlannerOptions
+
+    trials = options["trials"] if options["validate"] else 0
+    synthesis = synthesize(
+        spec,
+        SynthesisOptions(
+            plan=PlannerOptions(try_harder=options["try_harder"], exhaustive=options["exhaustive"]),
+            # One worker: the job already runs in a worker process of the server's pool.
+            proof=ProofOptions.for_task(spec, trials=trials, seed=options["seed"], workers=1),
+        ),
     )
-    program = emitter.emit_program(result.strategy, believed_graph(spec))
-    validation = (
-        _replay(program, spec, options["trials"], options["seed"]) if options["validate"] else None
-    )
+    document = synthesis.to_json()
+    program = document.pop("program")
     return {
         "task": spec.name,
         "spec": spec.model_dump(mode="json"),
-        "result": result.to_json(),
+        "result": document,
         "program": program,
-        "validation": validation,
+        "validation": synthesis.proof.as_replay_json() if options["validate"] else None,
     }
 
 

@@ -6,6 +6,8 @@ from pathlib import Path
 
 from synth.models.loader import load_task
 from synth.models.spec import Pose, TaskSpec
+from synth.pipeline import Synthesis, SynthesisOptions, synthesize
+from synth.replay.proof import ProofOptions
 
 FIXTURES = Path(__file__).resolve().parent.parent / "fixtures" / "tasks"
 
@@ -29,3 +31,14 @@ def plannable() -> list[Path]:
         if spec.insertion is not None and spec.manipulator is not None:
             out.append(path)
     return out
+
+
+def synthesized(task: Path | TaskSpec, trials: int = 0, seed: int = 0) -> Synthesis:
+    """The pipeline's proven program for ``task`` with a proof of ``trials`` (one process).
+
+    The proof of ``trials`` at the default 0.99 allows no failure below 100 trials, so a test
+    that asserts ``attempts == 1`` says the planner's first choice was the proven one.
+    """
+    options = SynthesisOptions(proof=ProofOptions(trials=trials, seed=seed, workers=1))
+    base_dir = FIXTURES if isinstance(task, TaskSpec) else None
+    return synthesize(task, options, base_dir=base_dir)

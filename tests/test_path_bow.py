@@ -16,12 +16,10 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
+from _tasks import synthesized
 
-from synth.codegen.emitter import emit_program
-from synth.errors.locate import believed_graph
 from synth.models.arm import nearest_solution
 from synth.models.loader import load_task
-from synth.replay.run import replay
 from synth.strategies.bow import BOW_FRACTION, axis_heights
 from synth.strategies.context import PlanContext, build_context
 from synth.strategies.planner import plan_task
@@ -117,8 +115,8 @@ def test_the_footprint_carries_the_bow(precision) -> None:
 def test_precision_fit_goes_in_nominally_and_in_sampled_worlds(precision) -> None:
     # Before the vias the program aborted "MISSED UNEXPECTEDLY" in every run, nominal included:
     # the straight joint-space move passed 3.7 mm off the hole at its mouth.
-    spec, _, s = precision
-    program = emit_program(s, believed_graph(spec))
-    report = replay(program, PRECISION, trials=10, seed=0)
-    assert report.nominal.outcome == "success", report.nominal.message
-    assert report.monte_carlo.outcomes == {"success": 10}
+    _, _, s = precision
+    proven = synthesized(PRECISION, trials=10)
+    assert [a.candidate for a in proven.attempts] == [s.name]  # the first choice is proven
+    assert proven.proof.nominal.outcome == "success", proven.proof.nominal.message
+    assert proven.proof.outcomes == {"success": 10}

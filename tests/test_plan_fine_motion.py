@@ -16,13 +16,11 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
+from _tasks import synthesized
 
-from synth.codegen.emitter import emit_program
-from synth.errors.locate import believed_graph
 from synth.models.arm import CollisionScene, nearest_solution
 from synth.models.loader import load_task
 from synth.models.workcell import NominalPoses, WorkcellModel
-from synth.replay.run import replay
 from synth.strategies.context import build_context
 from synth.strategies.planner import plan_task
 from synth.strategies.records import Grasp
@@ -70,10 +68,11 @@ def test_fine_motions_reject_the_palm_in_the_plate_and_keep_hand_down(dowel) -> 
 
 def test_dowel_program_succeeds_nominally_and_in_sampled_worlds(dowel) -> None:
     # Before: the γ = 100° program seated 8 of 10 sampled worlds (the palm on the plate).
-    spec, result = dowel
-    report = replay(emit_program(result.strategy, believed_graph(spec)), DOWEL, trials=10, seed=0)
-    assert report.nominal.outcome == "success", report.nominal.message
-    assert report.monte_carlo.outcomes == {"success": 10}
+    _, result = dowel
+    proven = synthesized(DOWEL, trials=10)
+    assert [a.candidate for a in proven.attempts] == [result.strategy.name]  # first choice
+    assert proven.proof.nominal.outcome == "success", proven.proof.nominal.message
+    assert proven.proof.outcomes == {"success": 10}
 
 
 def test_sideways_error_has_no_vertical_margin_and_plans() -> None:
@@ -90,12 +89,10 @@ def test_sideways_error_has_no_vertical_margin_and_plans() -> None:
     # Sideways, the support is the x error plus the chord of 3° at the radius (n ⟂ z).
     chord = 2 * math.sin(1.5 * DEG) * radius
     assert block.support(np.array([1.0, 0.0, 0.0])) == pytest.approx(0.5 * 2.54 * CM + chord)
-    result = plan_task(spec)
-    assert result.strategy.search is not None
-    program = emit_program(result.strategy, believed_graph(spec))
-    report = replay(program, SIDEWAYS, trials=10, seed=0)
-    assert report.nominal.outcome == "success", report.nominal.message
-    assert report.monte_carlo.outcomes == {"success": 10}
+    proven = synthesized(SIDEWAYS, trials=10)
+    assert proven.strategy.search is not None and len(proven.attempts) == 1
+    assert proven.proof.nominal.outcome == "success", proven.proof.nominal.message
+    assert proven.proof.outcomes == {"success": 10}
 
 
 def test_sampled_displacements_stay_within_the_directional_support() -> None:
@@ -139,12 +136,11 @@ def test_approach_height_follows_the_certified_height_error() -> None:
     path = TASKS / "height_error.yaml"
     spec = load_task(path)
     ctx = build_context(spec)
-    s = plan_task(spec).strategy
+    proven = synthesized(path, trials=10)
+    s = proven.strategy
     assert s.errors is not None and s.tap is not None and s.search is None
     assert s.errors.dz > 2.54 * CM  # ±1 in of box height alone
     held = ctx.gross.carrying.margins["PIN1"]
     assert s.standoff >= s.errors.dz + held + 1e-3 - 1e-9
     assert s.dtry - s.d_f >= s.errors.dz + 1e-3 - 1e-9
-    report = replay(emit_program(s, believed_graph(spec)), path, trials=10, seed=0)
-    assert report.nominal.outcome == "success", report.nominal.message
-    assert report.monte_carlo.outcomes == {"success": 10}
+    assert len(proven.attempts) == 1 and proven.proof.outcomes == {"success": 10}

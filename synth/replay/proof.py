@@ -227,6 +227,28 @@ class Proof:
             f"simulated time mean {self.time_mean:.2f} s, p95 {self.time_p95:.2f} s"
         )
 
+    def as_replay_json(self) -> dict[str, Any]:
+        """The proof in the shape of a replay report (:meth:`ReplayReport.to_json`).
+
+        ``monte_carlo`` covers the trials the proof ran (a full replay of as many trials with
+        the same seed reports the same figures); ``proof`` adds the proof's own record.
+        """
+        return {
+            "ok": self.nominal.success,
+            "nominal": self.nominal.to_json(),
+            "monte_carlo": {
+                "trials": self.trials,
+                "seed": self.options.seed,
+                "success_rate": self.rate,
+                "outcomes": dict(self.outcomes),
+                "time": {
+                    "mean": self.time_mean if self.trials else None,
+                    "p95": self.time_p95 if self.trials else None,
+                },
+            },
+            "proof": self.to_json(),
+        }
+
     def to_json(self) -> dict[str, Any]:
         """JSON form (SI units)."""
         lo, hi = self.interval
