@@ -17,7 +17,7 @@ decided, which leaves that verdict unchanged:
   than required (this can reject a program that would have scraped through the full budget;
   it never accepts one);
 * *early success on the Wilson bound*: the 95% Wilson lower bound is at or above
-  ``min_success`` (with 0.99 this needs 380 straight successes, so it only shortens large
+  ``min_success`` (with 0.99 this needs 381 straight successes, so it only shortens large
   proofs).
 
 The verdict is reproducible: the trials are consumed in trial order

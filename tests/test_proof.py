@@ -1,0 +1,220 @@
+"""The proof (synth.replay.proof) and the pipeline that writes only proven programs.
+
+Oracles: the fixed-size rate test the sequential test must agree with (an exhaustive check
+over every failure pattern of a small budget, and random long sequences), the Wilson bound's
+closed form for k = n (lower = n/(n + z²)), the seed's first-cut listing whose capture rate
+test_replay_montecarlo.py measures at 32% against an independent numpy model, and the
+sampled-world generator itself for the errors a failed trial reports.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from _tasks import FIXTURES, synthesized
+
+from synth.cli import DEFAULT_MIN_SUCCESS as CLI_MIN_SUCCESS
+from synth.cli import DEFAULT_PROOF_TRIALS as CLI_PROOF_TRIALS
+from synth.cli import main
+from synth.exceptions import NoStrategyError
+from synth.models.loader import load_task, parse_task
+from synth.replay.proof import (
+    DEFAULT_MIN_SUCCESS,
+    DEFAULT_PROOF_TRIALS,
+    MIN_TRIALS_FOR_BOUND,
+    Z_95,
+    ProofOptions,
+    _decide,
+    prove,
+)
+from synth.replay.report import wilson_interval
+from synth.replay.run import build_context, run_trial, trial_seed
+from synth.replay.trials import TrialPool
+from synth.replay.truth import sample_world
+from synth.strategies import PlanOptions, plan_task
+from synth.strategies.records import Rejection
+
+SEED = FIXTURES / "seed_4_8.yaml"
+FIRST_CUT = Path(__file__).resolve().parent / "data" / "al" / "seed_4_8_first_cut.al"
+
+
+def _sequential(options: ProofOptions, outcomes: list[bool]) -> tuple[bool, int]:
+    """The proof's rule applied to ``outcomes``: (passed, trials consumed)."""
+    successes = 0
+    for n, ok in enumerate(outcomes, start=1):
+        successes += ok
+        decision = _decide(options, successes, n)
+        if decision is not None:
+            return decision in ("budget", "wilson-lower"), n
+    raise AssertionError("the rule must decide by the budget")
+
+
+def _fixed(options: ProofOptions, outcomes: list[bool]) -> bool:
+    """The fixed-size test: the rate over the whole budget against min_success."""
+    return sum(outcomes) >= options.min_success * len(outcomes) - 1e-9
+
+
+@pytest.mark.parametrize("budget, rate", [(10, 0.8), (12, 0.9), (14, 0.99), (16, 0.75)])
+def test_sequential_test_agrees_with_the_fixed_size_test_on_every_pattern(budget, rate) -> None:
+    # Budgets below MIN_TRIALS_FOR_BOUND: only curtailment and the Wilson lower bound can stop
+    # early; both must give the verdict of the full budget, on every one of 2^budget patterns.
+    options = ProofOptions(trials=budget, min_success=rate)
+    assert budget < MIN_TRIALS_FOR_BOUND
+    for pattern in itertools.product((True, False), repeat=budget):
+        outcomes = list(pattern)
+        passed, consumed = _sequential(options, outcomes)
+        if consumed < budget and passed:  # an early pass: the bound cleared the rate
+            lo, _ = wilson_interval(sum(outcomes[:consumed]), consumed, Z_95)
+            assert lo >= rate
+        else:
+            assert passed == _fixed(options, outcomes), (outcomes, consumed)
+
+
+def test_sequential_test_never_passes_what_the_full_budget_fails() -> None:
+    # The Wilson upper rule may fail a program early, never pass it; curtailment is exact.
+    rng = np.random.default_rng(3)
+    options = ProofOptions(trials=300, min_success=0.99)
+    for p in (0.95, 0.98, 0.99, 0.995, 1.0):
+        for _ in range(200):
+            outcomes = list(rng.random(300) < p)
+            passed, consumed = _sequential(options, outcomes)
+            if passed and consumed == 300:
+                assert _fixed(options, outcomes)
+            if not _fixed(options, outcomes):
+                assert not passed or consumed < 300  # only an early Wilson-lower pass differs
+
+
+def test_wilson_lower_bound_of_a_clean_run_and_the_early_pass() -> None:
+    # k = n: lower = n/(n + z²) (the Wilson centre minus half-width collapses to this). It
+    # clears 0.99 once n ≥ 0.99·z²/0.01 = 380.3, i.e. from the 381st clean trial on.
+    z2 = Z_95**2
+    for n in (10, 100, 380, 381):
+        assert wilson_interval(n, n, Z_95)[0] == pytest.approx(n / (n + z2), rel=1e-12)
+    options = ProofOptions(trials=1000, min_success=0.99)
+    assert _decide(options, 380, 380) is None
+    assert _decide(options, 381, 381) == "wilson-lower"
+    # Curtailment at the default: 100 trials at 0.99 allow one failure; the second ends it.
+    default = ProofOptions()
+    assert (default.trials, default.min_success, default.allowed_failures) == (100, 0.99, 1)
+    assert _decide(default, 49, 50) is None and _decide(default, 49, 51) == "curtailed"
+
+
+def test_cli_defaults_match_the_proof_module() -> None:
+    assert (CLI_PROOF_TRIALS, CLI_MIN_SUCCESS) == (DEFAULT_PROOF_TRIALS, DEFAULT_MIN_SUCCESS)
+
+
+def test_options_come_from_the_task_unless_given() -> None:
+    text = SEED.read_text()
+    spec = parse_task(text + "proof: {min_success: 0.9, trials: 40}\n")
+    assert (ProofOptions.for_task(spec).trials, ProofOptions.for_task(spec).min_success) == (
+        40,
+        0.9,
+    )
+    given = ProofOptions.for_task(spec, trials=7, min_success=0.5)
+    assert (given.trials, given.min_success) == (7, 0.5)
+    assert ProofOptions.for_task(load_task(SEED)).trials == DEFAULT_PROOF_TRIALS
+
+
+@pytest.fixture(scope="module")
+def first_cut_proof():
+    spec = load_task(SEED)
+    text = FIRST_CUT.read_text()
+    return spec, text, prove(text, spec, ProofOptions(trials=100, seed=0), base_dir=FIXTURES)
+
+
+def test_a_failing_program_is_rejected_early_with_the_replays_reason(first_cut_proof) -> None:
+    # The first cut captures the pin in ~32% of worlds (test_replay_montecarlo.py): at 0.99 the
+    # second failure ends the proof, long before 100 trials.
+    spec, text, proof = first_cut_proof
+    assert proof.nominal.success and not proof.passed
+    assert proof.decided_by == "curtailed" and proof.trials <= 10
+    failure = proof.first_failure
+    assert failure is not None and failure.line is not None
+    reason = proof.reason()
+    assert f"AL line {failure.line}" in reason and failure.outcome in reason
+    # The errors reported are the trial's own draw: the same generator as run_trial's.
+    context = build_context(text, spec, base_dir=FIXTURES)
+    world_seed, _ = trial_seed(0, failure.index).spawn(2)
+    world = sample_world(context.graph, np.random.default_rng(world_seed))
+    assert failure.errors == world.parameters
+    box = failure.errors["box"]
+    assert set(box) == {"x", "y", "rz"}
+    assert abs(box["x"]) <= 0.3 * 0.0254 and abs(box["rz"]) <= math.radians(5)
+    assert run_trial(context, 0, failure.index).outcome == failure.outcome
+
+
+def test_the_proof_is_the_same_on_one_and_two_workers(first_cut_proof) -> None:
+    spec, text, one = first_cut_proof
+    with TrialPool(2) as pool:
+        two = prove(text, spec, ProofOptions(trials=100, seed=0), base_dir=FIXTURES, pool=pool)
+    assert (two.trials, two.successes, two.decided_by, dict(two.outcomes)) == (
+        one.trials,
+        one.successes,
+        one.decided_by,
+        dict(one.outcomes),
+    )
+    assert two.first_failure == one.first_failure
+
+
+def test_a_refused_candidate_sends_the_planner_to_the_next_best() -> None:
+    # accept() stands for a failed proof: the plan must fall back to the best of the others,
+    # which is exhaustive selection's best once the refused candidate is left out.
+    spec = load_task(SEED)
+    first = plan_task(spec).strategy
+    refused: list[str] = []
+
+    def refuse_first(strategy):
+        if strategy.name == first.name:
+            refused.append(strategy.name)
+            return Rejection(strategy.name, "replay proof failed: test", cause="proof")
+        return None
+
+    second = plan_task(spec, accept=refuse_first)
+    assert refused == [first.name] and second.strategy.name != first.name
+    everything = plan_task(spec, options=PlanOptions(exhaustive=True))
+    ranked = sorted(
+        (c for c in everything.candidates if c.refined and c.name != first.name),
+        key=lambda c: c.goodness,
+    )
+    assert second.strategy.name == ranked[0].name
+    proof_rejections = [r for r in second.rejected if r.stage == "proof"]
+    assert [r.candidate for r in proof_rejections] == [first.name]
+
+
+def test_no_proven_candidate_names_the_proof_as_root_cause() -> None:
+    spec = load_task(SEED)
+    with pytest.raises(NoStrategyError) as info:
+        plan_task(
+            spec,
+            accept=lambda s: Rejection(s.name, "replay proof failed: 0 of 5", cause="proof"),
+        )
+    first_line = str(info.value).splitlines()[0]
+    assert info.value.root.cause == "proof" and "replay proof" in first_line
+
+
+def test_synthesize_proves_the_seed_program_and_reports_it() -> None:
+    synthesis = synthesized(SEED, trials=20)
+    proof = synthesis.proof
+    assert proof.passed and proof.trials == 20 and proof.outcomes == {"success": 20}
+    assert [a.candidate for a in synthesis.attempts] == [synthesis.strategy.name]
+    document = synthesis.to_json()
+    assert document["proof"]["wilson_95"] == pytest.approx(list(wilson_interval(20, 20)))
+    assert document["program"] == synthesis.program
+
+
+def test_cli_reports_the_proof_and_checks_its_options(tmp_path, capsys) -> None:
+    out = tmp_path / "p.al"
+    assert main(["plan", str(SEED), "--proof-trials", "0", "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "Proof: nominal replay passed" in text and out.read_text().startswith("{")
+    assert main(["plan", str(SEED), "--proof-trials", "0", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["proof"]["passed"] and doc["proof"]["decided_by"] == "nominal-only"
+    for bad in (["--min-success", "1.5"], ["--proof-trials", "-1"], ["--workers", "0"]):
+        assert main(["plan", str(SEED), *bad]) == 2
+        assert bad[0] in capsys.readouterr().err
