@@ -16,6 +16,10 @@ that of a pin pivoting on the mouth's rim with its tip circle still landing insi
 
     θ_max = atan((r_m − a) / (h + w)),   h = the pin's tip taper length.
 
+Only the tip end is modelled: a pin arriving head first (turned over) is never captured, which
+is why the planner refuses such insertions. A captured pin may still wedge at its two-point
+contact (:mod:`synth.replay.wedging`, decided by :mod:`synth.replay.contact`).
+
 **Seat.** A captured pin slides along the hole axis until it is stopped: by the hole's bottom
 when its shaft fits the bore (depth = hole depth, or the pin's length if the hole is deeper),
 otherwise where its taper wedges in the bore or its tip in the chamfer.

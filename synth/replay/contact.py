@@ -10,8 +10,9 @@ c from the surface it reached. Distances come from Coal (GJK/EPA on the pin's co
 each obstacle: exact on the meshes near contact, bounding spheres and convex hulls far away).
 Every step also watches each hole's mouth plane: a tip that crosses it with its tip circle
 inside the mouth has been captured (:mod:`synth.replay.capture`); a contact whose tip circle is
-inside a mouth of the obstacle it touches is a capture too (the chamfer). Any other contact
-stops the pin on the surface.
+inside a mouth of the obstacle it touches is a capture too (the chamfer). Given the friction μ,
+a capture at a tilt past the two-point wedging onset is a wedge instead
+(:mod:`synth.replay.wedging`). Any other contact stops the pin on the surface.
 
 **Guided** (:func:`guided_motion`). A pin in a hole's bore follows the hole's axis: the hole
 takes the pin's lateral error and its tilt, the arm complies. Along the commanded path its tip
