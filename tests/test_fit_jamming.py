@@ -53,6 +53,19 @@ def test_an_equal_diameter_does_not_fit_and_a_thinner_pin_does() -> None:
         parse_task(text)
 
 
+def test_a_pin_wider_than_its_start_hole_is_refused_naming_the_start_hole() -> None:
+    # BH1 widened to 0.70 cm takes a 0.66 cm pin, but the rack hole RH1 (0.64 cm) it starts in
+    # cannot hold it
+    text = _seed_text().replace("diameter: 0.635 cm", "diameter: 0.66 cm")
+    bh1 = "pose: {translation: [3.85 cm, 3.20 cm, 4.90 cm]}"
+    head, tail = text.split(bh1, 1)
+    text = head + bh1 + tail.replace("diameter: 0.64 cm", "diameter: 0.70 cm", 1)
+    with pytest.raises(SpecError) as info:
+        parse_task(text)
+    assert info.value.path == "insertion.start_hole"
+    assert "pin PIN1 (0.66 cm) does not fit hole RH1 (0.64 cm)" in str(info.value)
+
+
 def test_planner_limit_is_whitneys_c_over_mu() -> None:
     assert clearance_ratio(D, d) == pytest.approx(0.0078125)
     # θ_wedge = c/μ = 0.0078125/0.3 = 0.0260417 rad = 1.4921°
