@@ -26,12 +26,10 @@ from pathlib import Path
 
 import yaml
 
-from synth.codegen.emitter import emit_program
-from synth.errors.locate import believed_graph
 from synth.exceptions import SynthError
-from synth.models.loader import load_task
-from synth.replay.run import replay
-from synth.strategies import PinInHoleStrategy, plan_task
+from synth.pipeline import SynthesisOptions, synthesize
+from synth.replay.proof import ProofOptions
+from synth.strategies import PinInHoleStrategy
 
 ROOT = Path(__file__).resolve().parent.parent
 SUITE = ROOT / "fixtures" / "tasks" / "generality"
@@ -81,26 +79,30 @@ def _decision(strategy: PinInHoleStrategy) -> str:
 
 
 def _synthesize(path: Path, trials: int, workers: int) -> Synthesis:
-    """Task file → proven program: plan, emit, replay nominally and ``trials`` times.
+    """Task file → proven program by :func:`synth.pipeline.synthesize` (the one pipeline).
 
-    Raises :class:`~synth.exceptions.SynthError` when the task is refused. The one step that
-    ``synth.pipeline.synthesize`` (issue 12, deliverable 2) replaces.
+    Raises :class:`~synth.exceptions.SynthError` when the task is refused, which includes a
+    task none of whose candidates' programs passed the proof. ``failures`` lists the first
+    failing trial of every candidate the proof rejected before the chosen one.
     """
-    spec = load_task(path)
-    result = plan_task(spec, base_dir=path.parent)
-    program = emit_program(result.strategy, believed_graph(spec))
-    report = replay(program, spec, trials=trials, seed=0, workers=workers, base_dir=path.parent)
+    options = SynthesisOptions(
+        proof=ProofOptions(trials=trials, min_success=MIN_SUCCESS, seed=0, workers=workers)
+    )
+    made = synthesize(path, options)
     failures: Counter[tuple[str, int | None, str]] = Counter()
-    for run in (report.nominal, *report.trials):
-        if run.outcome != "success":
-            failures[(run.outcome, run.line, run.message)] += 1
+    for attempt in made.attempts:
+        failed = attempt.proof.first_failure
+        if failed is not None:
+            failures[(failed.outcome, failed.line, f"{attempt.candidate}: {failed.message}")] += 1
+    proof = made.proof
     return Synthesis(
-        program=program,
-        decision=_decision(result.strategy),
-        planning_time=result.planning_time,
-        nominal=report.nominal.outcome,
-        trials=report.monte_carlo.trials,
-        successes=report.monte_carlo.outcomes.get("success", 0),
+        program=made.program,
+        decision=_decision(made.strategy)
+        + (f" (after {len(made.attempts) - 1} rejected)" if len(made.attempts) > 1 else ""),
+        planning_time=made.plan.planning_time,
+        nominal=proof.nominal.outcome,
+        trials=proof.trials,
+        successes=proof.successes,
         failures=failures,
     )
 

@@ -25,7 +25,12 @@ from synth.strategies.context import build_context
 from synth.strategies.grasp import generate_pickups
 from synth.strategies.options import PlanOptions
 from synth.strategies.records import PinInHoleStrategy, PlanResult, Rejection
-from synth.strategies.refine import Refined, minimum_refinement_cost, refine
+from synth.strategies.refine import (
+    Refined,
+    hole_tilt_problem,
+    minimum_refinement_cost,
+    refine,
+)
 from synth.strategies.select import select_strategy
 
 Accept = Callable[[PinInHoleStrategy], Rejection | None]
@@ -58,6 +63,9 @@ def plan_task(
     """
     start = time.perf_counter()
     ctx = build_context(spec, options, base_dir)
+    hopeless = hole_tilt_problem(ctx)
+    if hopeless is not None:
+        raise NoStrategyError(spec.name, (hopeless,), root_cause([hopeless]))
     pickups, dropped = generate_pickups(ctx, try_harder=ctx.options.try_harder)
     rejected = [_at_stage(r, "pickup") for r in dropped]
     candidates: list[Candidate] = []

@@ -66,6 +66,34 @@ def _deg(x: float) -> str:
     return f"{x / DEGREE:.3f}°"
 
 
+def hole_tilt_problem(ctx: PlanContext) -> Rejection | None:
+    """Refuse a task whose hole alone may tilt more than Δθ_ok (seed §4.5.1, L2290).
+
+    The pin's tilt at the hole composes the hand's tilt with the hole's own, so its worst
+    case is at least the hole axis' worst tilt in the world (the first-order bound of
+    ``world⁻¹ ∘ hole``, with every hand error at zero). No grasp, tap or search reduces a
+    part's rotation error, so every candidate would fail §4.5.1; saying so before any motion
+    is swept names the real cause (a leaning part's margins would otherwise block every
+    transport first).
+    """
+    from synth.errors.chain import chain_between
+    from synth.errors.estimate import estimate_errors
+    from synth.models.spec import WORLD
+
+    chain = chain_between(ctx.graph, WORLD, ctx.hole_frame)
+    tilt = estimate_errors(chain, WORLD, ctx.hole_frame).first_order.tilt
+    if tilt <= ctx.insertion.dtheta_ok:
+        return None
+    return Rejection(
+        "task",
+        f"tilt: the hole {ctx.hole_al} itself may tilt {_deg(tilt)} off its nominal axis (its "
+        f"part's rotation error), more than Δθ_ok = {_deg(ctx.insertion.dtheta_ok)}; no grasp, "
+        "tap or search corrects it (seed §4.5.1)",
+        cause="tilt",
+        stage="refine",
+    )
+
+
 def refine(ctx: PlanContext, cand: Candidate) -> Refined | Rejection:
     """Apply §4.5 to one candidate: a refined strategy or the reason it fails."""
     opts, ins = ctx.options, ctx.insertion
