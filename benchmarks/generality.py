@@ -1,8 +1,9 @@
 """Generality suite (issue 12): synthesize and prove a program for every task of the manifest.
 
 Usage: python benchmarks/generality.py [--trials N] [--workers W] [--fast] [--only NAME] [--why]
-                                      [--check]
-Reads ``fixtures/tasks/generality/expected.yaml``; per task, prints the expectation (``plan`` or
+                                      [--check] [--no-seed-fixtures]
+Reads ``fixtures/tasks/generality/expected.yaml`` (and adds the seed's own plannable fixtures,
+which must be proven too); per task, prints the expectation (``plan`` or
 ``refuse`` with the cause the refusal's first line must name), the decision (the chosen
 strategy and its refinement, or the refusal's first line), the planning time, the proof's trials
 and successes, and PASS or FAIL against the expectation; then a tally.
@@ -47,6 +48,13 @@ class Expectation:
     cause: str | None
     why: str
     fast: bool
+    path: Path | None = None
+    """The task file (default: the suite's ``<task>.yaml``)."""
+
+    @property
+    def file(self) -> Path:
+        """The task file."""
+        return self.path if self.path is not None else SUITE / f"{self.task}.yaml"
 
 
 @dataclass
@@ -122,6 +130,25 @@ def load_manifest(path: Path = MANIFEST) -> list[Expectation]:
     return out
 
 
+SEED_FIXTURES = ("seed_4_8", "seed_4_8_tap", "seed_4_8_fixture")
+"""The seed's plannable fixtures (fixtures/tasks/): every one must be proven too."""
+
+
+def seed_entries() -> list[Expectation]:
+    """The seed's fixtures as plannable entries (``--seed-fixtures``)."""
+    return [
+        Expectation(
+            name,
+            "plan",
+            None,
+            "the seed's own task",
+            False,
+            ROOT / "fixtures/tasks" / f"{name}.yaml",
+        )
+        for name in SEED_FIXTURES
+    ]
+
+
 @dataclass(frozen=True)
 class Row:
     """One line of the table."""
@@ -142,7 +169,7 @@ def judge(entry: Expectation, trials: int, workers: int) -> Row:
     expectation = "plan" if entry.expect == "plan" else f"refuse: {entry.cause}"
     start = time.perf_counter()
     try:
-        made = _synthesize(SUITE / f"{entry.task}.yaml", trials, workers)
+        made = _synthesize(entry.file, trials, workers)
     except SynthError as exc:
         wall = time.perf_counter() - start
         first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
@@ -192,9 +219,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--only", action="append", metavar="NAME", help="only this task")
     parser.add_argument("--why", action="store_true", help="list failing trials per task")
     parser.add_argument("--check", action="store_true", help="exit 1 unless every task passes")
+    parser.add_argument(
+        "--no-seed-fixtures",
+        action="store_true",
+        help="leave out the seed's own fixtures (fixtures/tasks/seed_4_8*.yaml)",
+    )
     args = parser.parse_args(argv)
 
-    entries = load_manifest()
+    entries = load_manifest() + ([] if args.no_seed_fixtures else seed_entries())
     if args.fast:
         entries = [e for e in entries if e.fast]
     if args.only:
