@@ -31,18 +31,15 @@ names the bodies of a collision) and the error parameters sampled in the first f
 from __future__ import annotations
 
 import math
-from collections import Counter
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
-import numpy as np
-
 from synth.models.spec import Distribution, TaskSpec
 from synth.replay.machine import ReplayOptions
-from synth.replay.report import OUTCOMES, RunReport, wilson_interval
-from synth.replay.run import build_context, run_nominal, trial_errors
+from synth.replay.report import RunReport, wilson_interval
+from synth.replay.run import build_context, run_nominal, summarise, trial_errors
 from synth.replay.trials import TrialPool, iter_trials, job_for
 
 __all__ = [
@@ -324,6 +321,7 @@ def prove(
     runs: list[RunReport] = []
     first: tuple[int, RunReport] | None = None
     decision: Decision | None = None
+    successes = 0
     try:
         trials = iter_trials(job, context, opts.seed, opts.trials, active)
         for run in trials:
@@ -332,7 +330,7 @@ def prove(
                 first = (len(runs) - 1, run)
             if progress is not None:
                 progress(len(runs), opts.trials)
-            successes = sum(r.success for r in runs)
+            successes += run.success
             decision = _decide(opts, successes, len(runs))
             if decision is not None:
                 trials.close()
@@ -341,9 +339,7 @@ def prove(
         if own_pool:
             active.close()
     assert decision is not None
-    successes = sum(r.success for r in runs)
-    counts = Counter(r.outcome for r in runs)
-    times = np.array([r.time for r in runs])
+    summary = summarise(runs, opts.seed)  # the counts and times a replay would report
     failed = None
     if first is not None:
         index, run = first
@@ -354,12 +350,12 @@ def prove(
         options=opts,
         nominal=nominal,
         trials=len(runs),
-        successes=successes,
+        successes=summary.successes,
         # At the budget the failures are within the allowance (else "curtailed" had fired).
         passed=decision in ("budget", "wilson-lower"),
         decided_by=decision,
-        outcomes={o: counts[o] for o in OUTCOMES if counts[o]},
-        time_mean=float(np.mean(times)),
-        time_p95=float(np.percentile(times, 95)),
+        outcomes=dict(summary.outcomes),
+        time_mean=summary.time_mean or 0.0,
+        time_p95=summary.time_p95 or 0.0,
         first_failure=failed,
     )
