@@ -23,7 +23,7 @@ def test_plan_writes_the_program_and_still_prints_the_summary(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out = tmp_path / "out" / "seed_4_8.al"  # the directory is created
-    assert main(["plan", str(TASK), "-o", str(out)]) == 0
+    assert main(["plan", str(TASK), "--proof-trials", "0", "-o", str(out)]) == 0
     printed = capsys.readouterr().out
     assert "PHL SPEC" in printed and f"AL program written to {out}" in printed
     text = out.read_text(encoding="utf-8")
@@ -35,7 +35,7 @@ def test_plan_writes_the_program_and_still_prints_the_summary(
 def test_plan_json_carries_the_program_and_preamble_makes_it_stand_alone(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    assert main(["plan", str(TASK), "--json", "--preamble"]) == 0
+    assert main(["plan", str(TASK), "--proof-trials", "0", "--json", "--preamble"]) == 0
     document = json.loads(capsys.readouterr().out)
     program = document["program"]
     assert program.startswith("{ World binding of task seed_4_8")
@@ -47,7 +47,7 @@ def test_plan_json_carries_the_program_and_preamble_makes_it_stand_alone(
 def test_plan_without_preamble_json_program_is_the_bare_program(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    assert main(["plan", str(TASK), "--json"]) == 0
+    assert main(["plan", str(TASK), "--proof-trials", "0", "--json"]) == 0
     program = json.loads(capsys.readouterr().out)["program"]
     assert program.startswith("{ PIN-IN-HOLE STRATEGY")
 
@@ -57,6 +57,6 @@ def test_plan_output_that_cannot_be_written_is_a_clean_error(
 ) -> None:
     blocker = tmp_path / "file"
     blocker.write_text("x", encoding="utf-8")
-    assert main(["plan", str(TASK), "-o", str(blocker / "sub" / "p.al")]) == 2
+    assert main(["plan", str(TASK), "--proof-trials", "0", "-o", str(blocker / "sub" / "p.al")]) == 2
     err = capsys.readouterr().err
     assert err.startswith("synth plan: error: cannot write") and "Traceback" not in err

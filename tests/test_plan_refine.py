@@ -232,3 +232,19 @@ def test_tap_lp_problem_is_built_apart_from_solving(tap) -> None:
     assert problem.first_order_lp.b_ub == pytest.approx([0.0, 0.0])
     lp = build_error_lp(problem.lp.objective, problem.space)
     np.testing.assert_allclose(lp.a_ub, problem.lp.a_ub)
+
+
+def test_axial_limit_keeps_a_miss_apart_from_a_seated_pin() -> None:
+    # At the limit L the test's threshold L/τ equals the shortest reading of a miss, d_f − d_s − L
+    # (a pin resting on the surface, shifted by the same height error): the closed form.
+    from synth.strategies.refine import axial_limit
+
+    for tau, d_f, d_s in ((0.75, 0.0171, 0.0), (0.5, 0.012, 0.002), (0.9, 0.03, 0.0)):
+        limit = axial_limit(tau, d_f, d_s)
+        assert limit / tau == pytest.approx(d_f - d_s - limit, rel=1e-12)
+    # seed_4_8 (L2738): Δz = .127–.18 cm is far inside 0.75·1.71/1.75 = 0.733 cm: no tap.
+    assert axial_limit(0.75, 0.0171, 0.0) == pytest.approx(0.0073286, rel=1e-4)
+    # The seed's rule τ·(d_f − d_s) (L2289) would accept Δz = 0.727 cm with d_f = 1.2 cm: a miss
+    # then reads ≥ 1.2 − 0.727 = 0.473 cm, inside the threshold 0.727/0.75 = 0.969 cm.
+    assert 0.00727 < 0.75 * 0.012 and 0.012 - 0.00727 < 0.00727 / 0.75
+    assert 0.00727 > axial_limit(0.75, 0.012, 0.0)
