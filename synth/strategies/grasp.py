@@ -15,6 +15,14 @@ along the pin axis, ω the turn of the hand about the pin axis. The method (L209
 4. approach point 2 in back along the hand's approach vector, departure point 2 in above the
    start hole (L2128), hand openings by L2139, and the pickup's expected time.
 
+Before the arm is asked (step 3), each grasp's ``center`` is checked against where the pin may
+really be (§4.3.1: "the pin's position be known with sufficient accuracy for the centering
+operation to succeed"): :func:`centering_bounds` bounds the pin's grasp point relative to the
+hand through the start part's uncertainty and the hand's error, and :func:`centering_problem`
+applies the hand's geometry. ``center`` registers the hand on the pin along the fingers' closing
+direction only; what the start location leaves along the pin axis and across the pads is the
+grasp determination (``GRASP DETERM``) that the insertion's footprint then carries.
+
 Each surviving pickup plans on in its own child world of the assertion base, in which the pin
 is affixed to the hand with its grasp (issue item 6).
 """
@@ -28,6 +36,10 @@ import numpy as np
 import pinocchio as pin
 import shapely
 
+from synth.errors.bounds import bound_linear
+from synth.errors.chain import ErrorChain, Fixed, Perturbation, Term
+from synth.errors.estimate import RelationModel, estimate_errors
+from synth.errors.parameters import ParameterBlock
 from synth.models.arm import SEED_GRASP_RATING
 from synth.models.spec import HandSpec, PinShape
 from synth.models.world import World
@@ -37,6 +49,15 @@ from synth.strategies.records import Destination, Grasp, GraspStrategy, Rejectio
 
 EXACT = "exact"
 """World atom for a grasp determination of NILTRANS: ``center`` holds the pin exactly (L2630)."""
+
+PAD_TILT = math.radians(10.0)
+"""[rad] largest angle between the pin's axis and the pads' plane at which ``center`` still
+closes both pads on the shaft [est: the rubber pads' give]."""
+OPENING_MARGIN = 1e-3
+"""[m] added to each side of a widened approach opening, so the fingers' descent along the
+approach clears the farthest place the pin may be."""
+OPENING_ROUNDING = 1e-3
+"""[m] a widened approach opening is rounded up to a whole number of these."""
 
 
 def grasp_distance_limits(
@@ -86,6 +107,205 @@ def hand_openings(diameter: float, options: PlanOptions) -> tuple[float, float]:
     threshold): the diameter − 0.1 in.
     """
     return diameter + options.approach_opening_extra, diameter - options.closure_margin
+
+
+def _inverse_terms(terms: list[Term]) -> list[Term]:
+    """Terms of the inverse product: reversed, each fixed pose and perturbation inverted."""
+    out: list[Term] = []
+    for t in reversed(terms):
+        if isinstance(t, Fixed):
+            out.append(Fixed(t.pose.inverse()))
+        else:
+            out.append(Perturbation(t.block, inverse=not t.inverse))
+    return out
+
+
+@dataclass(frozen=True)
+class CenteringBounds:
+    """Certified errors of the pin relative to the hand at the grasp point (seed §4.3.1).
+
+    In the hand frame (x the fingers' closing direction, z the approach vector) the pin's axis
+    should cross the x axis at the pads' centre with the grasp point, ``d`` up the pin from the
+    tip, at the origin. ``closing`` [m] bounds where along x the axis crosses (``center`` closes
+    the fingers and moves the arm by that much); ``across`` [m] the axis's distance from the x
+    axis (the pads reach ``r_fp``); ``axial`` [m] the grasp point's shift along the pin axis;
+    ``tilt`` [rad] the axis's angle to its nominal direction, which bounds its angle to the pads'
+    plane. ``residual`` is the grasp determination: ``(param, lo, hi)`` bounds [m, rad] of the
+    pin's error in the hand after ``center`` (a perturbation in the pin frame, the form of
+    :func:`synth.strategies.relations.held_end_terms`), from the start location's errors only;
+    empty when the start location is exact (NILTRANS).
+    """
+
+    closing: float
+    across: float
+    axial: float
+    tilt: float
+    residual: tuple[tuple[str, float, float], ...] = ()
+
+    def to_json(self) -> dict[str, object]:
+        """JSON form (SI)."""
+        return {
+            "closing": self.closing,
+            "across": self.across,
+            "axial": self.axial,
+            "tilt": self.tilt,
+            "grasp_determination": [list(r) for r in self.residual],
+        }
+
+
+def grasp_relation(ctx: PlanContext, grasp: Grasp, *, hand_error: bool = True) -> ErrorChain:
+    """``hand⁻¹ ∘ pin ∘ trans(0, 0, d)``: the pin's grasp point seen from the hand at the grasp.
+
+    ``E_hand(v)⁻¹ ∘ hand₀⁻¹ ∘ pin(v) ∘ trans(0, 0, d)``, ``hand₀ = pin₀ ∘ T_pin_hand`` the
+    nominal grasp (L2020) and ``pin(v)`` the pin's chain from the world through the start part's
+    uncertainty blocks (the same ``link:<frame>`` blocks the insertion's relations use). Without
+    ``hand_error`` the relation is the start location's share only.
+    """
+    from synth.strategies.relations import SpaceBuilder, frame_inverse_terms  # imports EXACT
+
+    builder = SpaceBuilder()
+    to_pin = _inverse_terms(frame_inverse_terms(ctx.graph, ctx.pin_frame, builder))
+    terms: list[Term] = []
+    unc = ctx.hand_error
+    if hand_error and unc is not None and unc.bounds():
+        owner = f"{ctx.hand_al}@grasp"
+        index = builder.block("hand:grasp", lambda: ParameterBlock.from_uncertainty(owner, unc))
+        terms.append(Perturbation(index, inverse=True))
+    transform_world_hand = ctx.world_pin * grasp.pin_from_hand()
+    terms.append(Fixed(transform_world_hand.inverse()))
+    terms += to_pin
+    terms.append(Fixed(_translation(grasp.distance)))
+    return ErrorChain(builder.space(), tuple(terms))
+
+
+def _support(rel: RelationModel, position: np.ndarray, axis: np.ndarray) -> float:
+    """Certified max |ℓ_p·Δp + ℓ_a·Δa| of the displacement Δp and axis change Δa [m]."""
+    first = bound_linear(rel.displacement.linear @ position + rel.axis.linear @ axis, rel.space)
+    slack = float(np.abs(position) @ rel.displacement.remainder)
+    slack += float(np.abs(axis) @ rel.axis.remainder)
+    return first.magnitude + slack
+
+
+def centering_bounds(ctx: PlanContext, grasp: Grasp) -> CenteringBounds:
+    """Bound where the pin may be between the fingers at the grasp (:class:`CenteringBounds`).
+
+    With q the grasp point's displacement and a = a₀ + Δa the pin axis in the hand frame,
+    a₀ = (0, sin γ, cos γ): the axis crosses the fingers' line at distance
+    ``|q_y a_z − q_z a_y| / |a_yz| ≤ (|n·q| + |q| sin t) / cos t`` from it, n = (0, cos γ,
+    −sin γ), and at ``x = q_x + μ a_x``, |μ a_x| ≤ |q| tan t, t the certified tilt. Each linear
+    support is the certified bound of :mod:`synth.errors.estimate` over the relation of
+    :func:`grasp_relation`.
+    """
+    chain = grasp_relation(ctx, grasp)
+    if chain.space.dim == 0:
+        return CenteringBounds(0.0, 0.0, 0.0, 0.0)
+    rel = RelationModel.of(chain)
+    tilt = estimate_errors(chain, ctx.hand_al, ctx.pin_al).certified.tilt
+    s, c = math.sin(grasp.gamma), math.cos(grasp.gamma)
+    zero = np.zeros(3)
+    qx = _support(rel, np.array([1.0, 0.0, 0.0]), zero)
+    qn = _support(rel, np.array([0.0, c, -s]), zero)
+    qa = _support(rel, np.array([0.0, s, c]), zero)
+    q_norm = math.sqrt(qx**2 + qn**2 + qa**2)
+    closing = qx + q_norm * math.tan(tilt)
+    across = (qn + q_norm * math.sin(tilt)) / math.cos(tilt)
+    return CenteringBounds(closing, across, qa, tilt, grasp_determination(ctx, grasp))
+
+
+def grasp_determination(ctx: PlanContext, grasp: Grasp) -> tuple[tuple[str, float, float], ...]:
+    """The pin's error in the hand after ``center``, from the start location (GRASP DETERM).
+
+    ``center`` moves the arm along the fingers' closing direction c = rot(ẑ, ω)x̂ (the hand's
+    x̂ in the pin frame) until the axis passes between the pads' centres, so the grasp point's
+    displacement along c is taken out: the tip is left at ``Δp − c (c·(Δp + d Δa))`` in the pin
+    frame, the axis keeps its tilt. The hand's own error at the grasp is left out, as the seed
+    assumes "the hand holds the pin with essentially no error" (L2244); the insertion's
+    relation adds the hand's error where the pin is inserted. Rotation about the pin's own axis
+    is left out too (the pin is a solid of revolution). Empty when the start is exact.
+    """
+    chain = grasp_relation(ctx, grasp, hand_error=False)
+    if chain.space.dim == 0:
+        return ()
+    rel = RelationModel.of(chain)
+    hand_from_pin = grasp.pin_from_hand().rotation.T
+    closing = np.array([1.0, 0.0, 0.0])  # the fingers' direction, in the hand frame
+    out: list[tuple[str, float, float]] = []
+    for k, name in enumerate(("x", "y", "z")):
+        e = hand_from_pin[:, k]  # the pin frame's axis k in the hand frame
+        # Δp_tip = q − d Δa; the residual along e is e·Δp_tip − (e·c)(c·q)
+        position = e - float(e @ closing) * closing
+        bound = _support(rel, position, -grasp.distance * e)
+        if bound > 1e-12:
+            out.append((name, -bound, bound))
+    # a small turn θ of the pin moves its axis by θ × ẑ = (θ_y, −θ_x, 0) in the pin frame
+    zero = np.zeros(3)
+    for name, e, sign in (("rx", hand_from_pin[:, 1], -1.0), ("ry", hand_from_pin[:, 0], 1.0)):
+        sine = _support(rel, zero, sign * e)
+        if sine > 1e-12:
+            angle = math.asin(min(1.0, sine))
+            out.append((name, -angle, angle))
+    return tuple(out)
+
+
+def centering_opening(
+    bounds: CenteringBounds,
+    grasp: Grasp,
+    pin_shape: PinShape,
+    hand: HandSpec,
+    d_i: float,
+    default_opening: float,
+) -> float | str:
+    """The approach opening [m] at which ``center`` takes the pin wherever it may be, or why not.
+
+    The geometry of the pads (:class:`CenteringBounds`): the axis must pass between the open
+    fingers, ``closing + r_pin ≤ opening / 2``, so the half-gap (opening − diameter)/2 must
+    cover ``closing`` — the seed's opening, pin diameter + 1 in (L2139), or wider up to the
+    hand's largest opening; it must cross the pads, ``across ≤ r_fp``, since ``center`` only
+    moves along the closing direction; it must lie within ``PAD_TILT`` of the pads' plane; the
+    grasp point must stay on the full-diameter shaft, ``l_taper ≤ d ± axial ≤ l_pin``; and the
+    fingers must stay above the start hole's plane (condition a, L2030) with the pin ``axial``
+    lower than believed.
+    """
+    r_pin = pin_shape.diameter / 2
+    r_fp = hand.finger_pad_radius
+    if bounds.across > r_fp:
+        return (
+            f"pin may be {100 * bounds.across:.2f} cm across from the finger pads' centres, the "
+            f"pads reach {100 * r_fp:.2f} cm (CENTER registers the hand along the fingers only)"
+        )
+    if bounds.tilt > PAD_TILT:
+        return (
+            f"pin axis may lie {math.degrees(bounds.tilt):.1f}° out of the finger pads' plane, "
+            f"CENTER takes {math.degrees(PAD_TILT):.0f}°"
+        )
+    shaft = pin_shape.tip_taper_length
+    d = grasp.distance
+    if d - bounds.axial < shaft or d + bounds.axial > pin_shape.length:
+        return (
+            f"the fingers may close {100 * bounds.axial:.2f} cm off the grasp distance "
+            f"{100 * d:.2f} cm, off the pin's shaft ({100 * shaft:.2f}–"
+            f"{100 * pin_shape.length:.2f} cm from the tip)"
+        )
+    lo, _ = finger_span(grasp, hand)
+    if lo - bounds.axial < d_i - 1e-12:
+        return (
+            f"with the pin {100 * bounds.axial:.2f} cm off along its axis the fingers reach "
+            f"{100 * (d_i - lo + bounds.axial):.2f} cm below the start hole's plane "
+            "(seed §4.3.2 condition a)"
+        )
+    needed = pin_shape.diameter + 2 * bounds.closing
+    if needed <= default_opening:
+        return default_opening
+    widened = pin_shape.diameter + 2 * (bounds.closing + OPENING_MARGIN)
+    widened = math.ceil(widened / OPENING_ROUNDING - 1e-9) * OPENING_ROUNDING
+    if widened > hand.max_opening:
+        return (
+            f"pin may be {100 * bounds.closing:.2f} cm from the fingers' centre, the approach "
+            f"opening leaves {100 * (default_opening / 2 - r_pin):.2f} cm and the hand's "
+            f"largest opening {100 * hand.max_opening:.2f} cm leaves "
+            f"{100 * (hand.max_opening / 2 - r_pin):.2f} cm"
+        )
+    return widened
 
 
 def finger_span(grasp: Grasp, hand: HandSpec) -> tuple[float, float]:
@@ -250,21 +470,30 @@ def generate_pickups(
                 label = f"γ={math.degrees(gamma):.0f}° d={100 * d:.2f} cm"
                 rejected.append(Rejection(label, problem))
                 continue
-            rated: list[tuple[float, int, Grasp, Configuration, Configuration]] = []
+            rated: list[
+                tuple[float, int, Grasp, Configuration, Configuration, CenteringBounds, float]
+            ] = []
             for k, omega in enumerate(omegas):
                 grasp = Grasp(omega, gamma, d)
+                centering = centering_bounds(ctx, grasp)
+                opening = centering_opening(
+                    centering, grasp, ctx.pin_shape, ctx.hand, ctx.d_i, approach_opening
+                )
+                if isinstance(opening, str):
+                    rejected.append(Rejection(grasp_label(grasp), opening))
+                    continue
                 found = reached_grasp(ctx, grasp)
                 if isinstance(found, Rejection):
                     rejected.append(found)
                     continue
                 q_approach, q_grasp = found
                 rating = float(SEED_GRASP_RATING(ctx.arm, q_grasp))
-                rated.append((rating, k, grasp, q_approach, q_grasp))
+                rated.append((rating, k, grasp, q_approach, q_grasp, centering, opening))
             # Ratings equal to 1e-9 rad are ties (γ = 180°: θ5 does not depend on ω); ties keep
             # the ω order, so float noise cannot decide which ω survive the pruning.
             rated.sort(key=lambda r: (round(r[0], 9), r[1]))
             keep = rated if try_harder else rated[: opts.keep_omegas]
-            for cost, _, grasp, _, _ in rated[len(keep) :]:
+            for cost, _, grasp, *_ in rated[len(keep) :]:
                 rejected.append(
                     Rejection(
                         grasp_label(grasp),
@@ -272,9 +501,9 @@ def generate_pickups(
                         f"{opts.keep_omegas} ω are kept (seed L2122; --try-harder keeps all)",
                     )
                 )
-            for cost, _, grasp, q_approach, q_grasp in keep:
+            for cost, _, grasp, q_approach, q_grasp, centering, opening in keep:
                 made = _pickup(
-                    ctx, grasp, cost, q_approach, q_grasp, approach_opening, grasp_opening
+                    ctx, grasp, cost, q_approach, q_grasp, opening, grasp_opening, centering
                 )
                 if isinstance(made, Rejection):
                     rejected.append(made)
@@ -312,6 +541,7 @@ def _pickup(
     q_grasp: Configuration,
     approach_opening: float,
     grasp_opening: float,
+    centering: CenteringBounds,
 ) -> Pickup | Rejection:
     """Departure point, the gross-motion check and the pickup's time (§4.3.3)."""
     opts = ctx.options
@@ -343,17 +573,18 @@ def _pickup(
         goodness=goodness,
         rating=rating,
         joint_solution=tuple(float(x) for x in q_grasp),
-        grasp_determination=None,
+        grasp_determination=centering.residual or None,
         remarks=(
             f"W = {math.degrees(grasp.omega):.1f} deg Grasp Angle = "
             f"{math.degrees(grasp.gamma):.1f} deg Grasp Distance = {100 * grasp.distance:.2f}"
         ),
+        centering=centering,
     )
     world = (
         ctx.base_world.child(grasp_label(grasp))
         .set_value("holding", hand_al, pin_al)
         .set_value("affixed", pin_al, hand_al, grasp)
-        .set_value("grasp-determination", pin_al, EXACT)
+        .set_value("grasp-determination", pin_al, centering.residual or EXACT)
         .set_value("at", pin_al, "departure")
     )
     return Pickup(strategy, q_approach, q_grasp, q_departure, move_time, lift_time, world)

@@ -11,10 +11,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import pinocchio as pin
+
+if TYPE_CHECKING:
+    from synth.strategies.grasp import CenteringBounds
 
 
 def _se3_json(pose: pin.SE3) -> dict[str, list[float]]:
@@ -71,9 +74,12 @@ class GraspStrategy:
     """Pickup by grasping between the fingers (seed §4.1 "Grasp Strategy", L1895–1910).
 
     Openings in [m]; ``goodness`` is the expected pickup time [s]. ``grasp_determination`` is
-    the pin-in-hand error block after ``center`` (None = NILTRANS, exactly held).
-    ``joint_solution`` is the arm configuration at the grasp point and ``rating`` its grade
-    (seed L2086–2100: |45° − θ5|, lower is better).
+    the pin-in-hand error block after ``center`` (None = NILTRANS, exactly held): ``(param,
+    lo, hi)`` bounds [m, rad] of a perturbation in the pin frame. ``centering`` holds the
+    certified bounds the openings and that block come from
+    (:class:`synth.strategies.grasp.CenteringBounds`). ``joint_solution`` is the arm
+    configuration at the grasp point and ``rating`` its grade (seed L2086–2100: |45° − θ5|,
+    lower is better).
     """
 
     object: str
@@ -89,6 +95,7 @@ class GraspStrategy:
     grasp_determination: Any = None
     preliminaries: tuple[str, ...] = ()
     remarks: str = ""
+    centering: CenteringBounds | None = None
 
     def to_json(self) -> dict[str, Any]:
         """JSON form (SI)."""
@@ -103,6 +110,10 @@ class GraspStrategy:
             "goodness": self.goodness,
             "rating": self.rating,
             "remarks": self.remarks,
+            "grasp_determination": None
+            if self.grasp_determination is None
+            else [list(b) for b in self.grasp_determination],
+            "centering": None if self.centering is None else self.centering.to_json(),
         }
 
 
