@@ -57,6 +57,8 @@ def test_plan_output_that_cannot_be_written_is_a_clean_error(
 ) -> None:
     blocker = tmp_path / "file"
     blocker.write_text("x", encoding="utf-8")
-    assert main(["plan", str(TASK), "--proof-trials", "0", "-o", str(blocker / "sub" / "p.al")]) == 2
+    assert (
+        main(["plan", str(TASK), "--proof-trials", "0", "-o", str(blocker / "sub" / "p.al")]) == 2
+    )
     err = capsys.readouterr().err
     assert err.startswith("synth plan: error: cannot write") and "Traceback" not in err

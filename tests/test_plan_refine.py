@@ -247,4 +247,4 @@ def test_axial_limit_keeps_a_miss_apart_from_a_seated_pin() -> None:
     # The seed's rule τ·(d_f − d_s) (L2289) would accept Δz = 0.727 cm with d_f = 1.2 cm: a miss
     # then reads ≥ 1.2 − 0.727 = 0.473 cm, inside the threshold 0.727/0.75 = 0.969 cm.
     assert 0.00727 < 0.75 * 0.012 and 0.012 - 0.00727 < 0.00727 / 0.75
-    assert 0.00727 > axial_limit(0.75, 0.012, 0.0)
+    assert axial_limit(0.75, 0.012, 0.0) < 0.00727
