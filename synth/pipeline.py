@@ -125,6 +125,8 @@ def synthesize(
     attempts: list[CandidateProof] = []
     programs: dict[str, str] = {}
     with TrialPool(proof_options.workers) as pool:
+        if proof_options.trials:
+            pool.warm()
 
         def accept(strategy: PinInHoleStrategy) -> Rejection | None:
             body = emit_program(strategy, graph)

@@ -101,6 +101,10 @@ def _run_chunk(job: TrialJob, seed: int, start: int, stop: int) -> list[RunRepor
     return [run_trial(context, seed, i) for i in range(start, stop)]
 
 
+def _import_replay() -> None:
+    import synth.replay.run  # noqa: F401  (pinocchio, coal, the AL parser and the machine)
+
+
 class TrialPool:
     """A pool of ``workers`` processes for Monte Carlo trials, started on first use.
 
@@ -118,6 +122,16 @@ class TrialPool:
                 max_workers=self.workers, mp_context=multiprocessing.get_context("spawn")
             )
         return self._executor
+
+    def warm(self) -> None:
+        """Start the workers now, each importing the replay.
+
+        The start-up then overlaps whatever the caller does next (the pipeline plans).
+        """
+        if self.workers > 1:
+            executor = self.executor()
+            for _ in range(self.workers):
+                executor.submit(_import_replay)
 
     def close(self) -> None:
         """Stop the workers; trials not yet started are cancelled."""
