@@ -218,3 +218,15 @@ def test_cli_reports_the_proof_and_checks_its_options(tmp_path, capsys) -> None:
     for bad in (["--min-success", "1.5"], ["--proof-trials", "-1"], ["--workers", "0"]):
         assert main(["plan", str(SEED), *bad]) == 2
         assert bad[0] in capsys.readouterr().err
+
+
+def test_a_pin_from_an_uncertain_rack_is_relocated_after_center_and_proven() -> None:
+    # The rack slides ±0.75 in along x: CENTER moves the arm onto the true pin, so the program
+    # must believe the pin where the hand now is (PIN1 ← BMANIP*TRANS(grasp⁻¹)); with AFFIX
+    # alone the believed grip kept the rack's error and 2 of the first 19 trials missed BH1
+    # (the proof rejected all three candidates). The seed's exact rack emits no such line.
+    rail = Path(__file__).resolve().parent / "data" / "tasks" / "uncertain_rack_rail.yaml"
+    proven = synthesized(rail, trials=20)
+    assert "PIN1 ← BMANIP*TRANS(" in proven.program
+    assert proven.proof.passed and proven.proof.outcomes == {"success": 20}
+    assert "PIN1 ← BMANIP" not in (FIXTURES.parent / "golden" / "seed_4_8.al").read_text()

@@ -108,6 +108,9 @@ class PickupView:
     grasp_opening: Fragment
     grasp_failed: Fragment
     departure: tuple[MoveView, ...]
+    relocate: Fragment | None = None
+    """``hand*TRANS(grasp⁻¹)``: where the pin is believed once CENTER has registered the hand
+    on it, when its start location was uncertain (the record's GRASP DETERM, L2244)."""
 
 
 @dataclass(frozen=True)
@@ -330,6 +333,13 @@ def _pickup(s: PinInHoleStrategy, names: _Names, pin_: Fragment) -> PickupView:
         ),
         grasp_failed=L.string(GRASP_FAILED),
         departure=departure,
+        # CENTER moved the arm onto the true pin: re-derive the pin from the hand, or AFFIX
+        # would keep the start location's error in the grip the program believes.
+        relocate=None
+        if p.grasp_determination is None
+        else L.pose(
+            names.hand(s.hand, "hand"), p.grasp.pin_from_hand().inverse(), field="pickup.grasp"
+        ),
     )
 
 
