@@ -69,19 +69,23 @@ class CandidateProof:
 
 @dataclass(frozen=True, eq=False)
 class Synthesis:
-    """A proven program: the plan that chose it, its text, its proof, and the proofs tried.
+    """A proven program: the plan that chose it, its text, and the proofs tried.
 
-    ``program`` is the text to write (with the preamble when asked); ``proof`` the chosen
-    program's; ``attempts`` every candidate proven, the failed ones first; ``graph`` the
-    believed world the program was planned in.
+    ``program`` is the text to write (with the preamble when asked); ``attempts`` every
+    candidate proven, the failed ones first, the last being the chosen program's
+    (:attr:`proof`); ``graph`` the believed world the program was planned in.
     """
 
     task: TaskSpec
     graph: AttributeGraph
     plan: PlanResult
     program: str
-    proof: Proof
     attempts: tuple[CandidateProof, ...]
+
+    @property
+    def proof(self) -> Proof:
+        """The chosen program's proof: the last one tried, the one that passed."""
+        return self.attempts[-1].proof
 
     @property
     def strategy(self) -> PinInHoleStrategy:
@@ -148,7 +152,6 @@ def synthesize(
         graph=graph,
         plan=plan,
         program=program,
-        proof=attempts[-1].proof,
         attempts=tuple(attempts),
     )
 

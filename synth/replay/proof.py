@@ -38,7 +38,7 @@ from typing import Any, Literal
 
 from synth.models.spec import Distribution, TaskSpec
 from synth.replay.machine import ReplayOptions
-from synth.replay.report import RunReport, wilson_interval
+from synth.replay.report import MonteCarloReport, RunReport, wilson_interval
 from synth.replay.run import build_context, run_nominal, summarise, trial_errors
 from synth.replay.trials import TrialPool, iter_trials, job_for
 
@@ -163,32 +163,54 @@ class FailedTrial:
 class Proof:
     """The outcome of proving one program (see the module docstring).
 
-    ``trials`` counts the trials the test consumed (≤ the budget in ``options``),
-    ``successes`` those that succeeded; ``decided_by`` names the rule that ended the test;
-    ``outcomes`` counts the trials per outcome; ``time_mean``/``time_p95`` [s] the simulated
-    program time over the trials (the nominal run's when there were none).
+    ``monte_carlo`` summarises the trials the test consumed (≤ the budget in ``options``), as
+    a replay of as many trials with the same seed reports them; ``decided_by`` names the rule
+    that ended the test.
     """
 
     options: ProofOptions
     nominal: RunReport
-    trials: int
-    successes: int
+    monte_carlo: MonteCarloReport
     passed: bool
     decided_by: Decision
-    outcomes: Mapping[str, int] = field(default_factory=dict)
-    time_mean: float = 0.0
-    time_p95: float = 0.0
     first_failure: FailedTrial | None = None
+
+    @property
+    def trials(self) -> int:
+        """Trials the test consumed."""
+        return self.monte_carlo.trials
+
+    @property
+    def successes(self) -> int:
+        """Trials that succeeded."""
+        return self.monte_carlo.successes
+
+    @property
+    def outcomes(self) -> Mapping[str, int]:
+        """Trials per outcome (only outcomes that occurred)."""
+        return self.monte_carlo.outcomes
 
     @property
     def rate(self) -> float | None:
         """Successes over trials (None without trials)."""
-        return self.successes / self.trials if self.trials else None
+        return self.monte_carlo.success_rate
 
     @property
     def interval(self) -> tuple[float, float]:
         """The 95% Wilson interval of the success rate."""
-        return wilson_interval(self.successes, self.trials, Z_95)
+        return self.monte_carlo.interval(Z_95)
+
+    @property
+    def time_mean(self) -> float:
+        """[s] mean simulated program time over the trials (the nominal run's without any)."""
+        mean = self.monte_carlo.time_mean
+        return self.nominal.time if mean is None else mean
+
+    @property
+    def time_p95(self) -> float:
+        """[s] 95th percentile of the simulated time (the nominal run's without trials)."""
+        p95 = self.monte_carlo.time_p95
+        return self.nominal.time if p95 is None else p95
 
     def reason(self) -> str:
         """Why the proof failed, in one line (empty when it passed)."""
@@ -233,16 +255,7 @@ class Proof:
         return {
             "ok": self.nominal.success,
             "nominal": self.nominal.to_json(),
-            "monte_carlo": {
-                "trials": self.trials,
-                "seed": self.options.seed,
-                "success_rate": self.rate,
-                "outcomes": dict(self.outcomes),
-                "time": {
-                    "mean": self.time_mean if self.trials else None,
-                    "p95": self.time_p95 if self.trials else None,
-                },
-            },
+            "monte_carlo": self.monte_carlo.to_json(),
             "proof": self.to_json(),
         }
 
@@ -306,16 +319,10 @@ def prove(
     )
     nominal = run_nominal(context)
     if not nominal.success:
-        return Proof(opts, nominal, 0, 0, False, "nominal", {}, nominal.time, nominal.time)
+        return Proof(opts, nominal, summarise([], opts.seed), False, "nominal")
     if opts.trials == 0:
-        return Proof(opts, nominal, 0, 0, True, "nominal-only", {}, nominal.time, nominal.time)
-    job = job_for(
-        program_text,
-        task,
-        base_dir=base_dir,
-        options=replay_options,
-        distribution=opts.distribution,
-    )
+        return Proof(opts, nominal, summarise([], opts.seed), True, "nominal-only")
+    job = job_for(program_text, context, base_dir=base_dir, options=replay_options)
     own_pool = pool is None
     active = pool if pool is not None else TrialPool(opts.workers)
     runs: list[RunReport] = []
@@ -339,7 +346,6 @@ def prove(
         if own_pool:
             active.close()
     assert decision is not None
-    summary = summarise(runs, opts.seed)  # the counts and times a replay would report
     failed = None
     if first is not None:
         index, run = first
@@ -349,13 +355,9 @@ def prove(
     return Proof(
         options=opts,
         nominal=nominal,
-        trials=len(runs),
-        successes=summary.successes,
+        monte_carlo=summarise(runs, opts.seed),  # the counts and times a replay would report
         # At the budget the failures are within the allowance (else "curtailed" had fired).
         passed=decision in ("budget", "wilson-lower"),
         decided_by=decision,
-        outcomes=dict(summary.outcomes),
-        time_mean=summary.time_mean or 0.0,
-        time_p95=summary.time_p95 or 0.0,
         first_failure=failed,
     )

@@ -264,15 +264,7 @@ def replay(
         distribution=distribution,
     )
     nominal = run_nominal(context)
-    spec = task if isinstance(task, TaskSpec) else load_task(task)
-    job = job_for(
-        program_text,
-        spec,
-        filename=filename,
-        base_dir=base_dir,
-        options=options,
-        distribution=distribution,
-    )
+    job = job_for(program_text, context, filename=filename, base_dir=base_dir, options=options)
     runs: list[RunReport] = []
     with TrialPool(min(workers, max(trials, 1))) as pool:
         for run in iter_trials(job, context, seed, trials, pool):

@@ -22,11 +22,14 @@ from collections.abc import Generator
 from concurrent.futures import Future, ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
-from synth.models.spec import Distribution, TaskSpec
+from synth.models.spec import TaskSpec
 from synth.replay.machine import ReplayOptions
 from synth.replay.report import RunReport
+
+if TYPE_CHECKING:  # run imports this module
+    from synth.replay.run import ReplayContext
 
 __all__ = ["TrialJob", "TrialPool", "iter_trials", "job_for"]
 
@@ -42,8 +45,9 @@ _CACHED_CONTEXTS = 4
 class TrialJob:
     """What a worker needs to rebuild a replay context: the program and its task.
 
-    ``spec`` is the task as parsed (contact-located objects are resolved by the worker, as by
-    :func:`~synth.replay.run.build_context`); ``base_dir`` resolves URDF paths.
+    ``spec`` is the caller's context's task (contacts already resolved, a ``--distribution``
+    already applied: building a context from it again changes nothing); ``base_dir`` resolves
+    URDF paths.
     """
 
     program_text: str
@@ -51,7 +55,6 @@ class TrialJob:
     filename: str = "<al>"
     base_dir: str | None = None
     options: ReplayOptions | None = None
-    distribution: Distribution | None = None
 
     @property
     def key(self) -> str:
@@ -63,17 +66,16 @@ class TrialJob:
             self.filename,
             str(self.base_dir),
             repr(self.options),
-            str(self.distribution),
         ):
             digest.update(part.encode())
             digest.update(b"\0")
         return digest.hexdigest()
 
 
-_CONTEXTS: OrderedDict[str, Any] = OrderedDict()
+_CONTEXTS: OrderedDict[str, ReplayContext] = OrderedDict()
 
 
-def _context(job: TrialJob) -> Any:
+def _context(job: TrialJob) -> ReplayContext:
     from synth.replay.run import build_context
 
     key = job.key
@@ -86,7 +88,6 @@ def _context(job: TrialJob) -> Any:
         filename=job.filename,
         base_dir=job.base_dir,
         options=job.options,
-        distribution=job.distribution,
     )
     _CONTEXTS[key] = context
     while len(_CONTEXTS) > _CACHED_CONTEXTS:
@@ -148,7 +149,7 @@ class TrialPool:
 
 def iter_trials(
     job: TrialJob,
-    context: Any,
+    context: ReplayContext,
     seed: int,
     count: int,
     pool: TrialPool | None = None,
@@ -180,19 +181,13 @@ def iter_trials(
 
 def job_for(
     program_text: str,
-    spec: TaskSpec,
+    context: ReplayContext,
     *,
     filename: str = "<al>",
     base_dir: str | Path | None = None,
     options: ReplayOptions | None = None,
-    distribution: Distribution | None = None,
 ) -> TrialJob:
-    """The :class:`TrialJob` of a replay's arguments (``base_dir`` as a string)."""
+    """The :class:`TrialJob` of a replay whose own context is ``context``."""
     return TrialJob(
-        program_text,
-        spec,
-        filename,
-        None if base_dir is None else str(base_dir),
-        options,
-        distribution,
+        program_text, context.spec, filename, None if base_dir is None else str(base_dir), options
     )
