@@ -14,6 +14,11 @@ import sys
 from collections.abc import Callable, Sequence
 
 from synth.exceptions import SynthError
+from synth.replay.cli_command import (  # light: heavy imports run later
+    add_replay_parser,
+    add_workers_argument,
+    resolve_workers,
+)
 
 EXIT_USAGE = 2
 EXIT_INTERNAL = 70
@@ -78,9 +83,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         raise SynthError(f"--proof-trials must be 0 or more, got {args.proof_trials}")
     if args.min_success is not None and not 0.0 <= args.min_success <= 1.0:
         raise SynthError(f"--min-success must lie between 0 and 1, got {args.min_success}")
-    workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
-    if workers < 1:
-        raise SynthError(f"--workers must be 1 or more, got {workers}")
+    workers = resolve_workers(args.workers)
     options = SynthesisOptions(
         plan=PlanOptions(try_harder=args.try_harder, exhaustive=args.exhaustive),
         proof=ProofOptions.for_task(
@@ -178,12 +181,7 @@ def build_parser() -> argparse.ArgumentParser:
         f"{DEFAULT_MIN_SUCCESS:g})",
     )
     p.add_argument("--seed", type=int, default=0, help="random seed of the proof (default: 0)")
-    p.add_argument(
-        "--workers",
-        type=int,
-        default=None,
-        help="processes running the proof's trials (default: one per CPU core)",
-    )
+    add_workers_argument(p, "the proof's trials")
     p.set_defaults(func=_cmd_plan)
 
     p = sub.add_parser("locate", help="derive object locations from their contacts (seed A.1)")
@@ -213,8 +211,6 @@ def build_parser() -> argparse.ArgumentParser:
         help="directory task URDFs may come from; repeatable ($SYNTH_MODEL_DIRS)",
     )
     p.set_defaults(func=_cmd_serve)
-
-    from synth.replay.cli_command import add_replay_parser  # light: heavy imports run later
 
     add_replay_parser(sub)
     return parser

@@ -23,7 +23,14 @@ from typing import Any, TextIO
 
 from synth.exceptions import SynthError
 
-__all__ = ["DEFAULT_TRIALS", "ProgressBar", "add_replay_parser", "run_replay"]
+__all__ = [
+    "DEFAULT_TRIALS",
+    "ProgressBar",
+    "add_replay_parser",
+    "add_workers_argument",
+    "resolve_workers",
+    "run_replay",
+]
 
 DEFAULT_TRIALS = 100
 """Monte Carlo trials when ``--trials`` is not given."""
@@ -58,6 +65,24 @@ class ProgressBar:
             self.stream.flush()
 
 
+def add_workers_argument(parser: Any, what: str) -> None:
+    """``--workers K``: the processes running ``what`` (``synth plan`` and ``synth replay``)."""
+    parser.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        help=f"processes running {what} (default: one per CPU core)",
+    )
+
+
+def resolve_workers(value: int | None) -> int:
+    """``--workers`` as a count: one per CPU core when not given; below 1 is a usage error."""
+    workers = value if value is not None else (os.cpu_count() or 1)
+    if workers < 1:
+        raise SynthError(f"--workers must be 1 or more, got {workers}")
+    return workers
+
+
 def add_replay_parser(sub: Any) -> None:
     """Add the ``replay`` subcommand to ``synth``'s subparsers."""
     p = sub.add_parser(
@@ -73,12 +98,7 @@ def add_replay_parser(sub: Any) -> None:
         help=f"Monte Carlo trials in sampled true worlds (default: {DEFAULT_TRIALS}; 0: none)",
     )
     p.add_argument("--seed", type=int, default=0, help="random seed of the trials (default: 0)")
-    p.add_argument(
-        "--workers",
-        type=int,
-        default=None,
-        help="processes running the trials (default: one per CPU core)",
-    )
+    add_workers_argument(p, "the trials")
     p.add_argument(
         "--distribution",
         choices=("uniform", "normal"),
@@ -124,9 +144,7 @@ def run_replay(args: argparse.Namespace) -> int:
         raise SynthError("give the PROGRAM.al to replay (or --preamble to print the binding)")
     if args.trials < 0:
         raise SynthError(f"--trials must be 0 or more, got {args.trials}")
-    workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
-    if workers < 1:
-        raise SynthError(f"--workers must be 1 or more, got {workers}")
+    workers = resolve_workers(args.workers)
     text = _read_program(args.program)
 
     from synth.replay.report import replay_summary

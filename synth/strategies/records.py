@@ -16,6 +16,8 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 import pinocchio as pin
 
+from synth.strategies.causes import classify
+
 if TYPE_CHECKING:
     from synth.strategies.grasp import CenteringBounds
 
@@ -375,8 +377,6 @@ class Rejection:
     @property
     def kind(self) -> str:
         """The cause: the one given, or the one the reason's wording names."""
-        from synth.strategies.causes import classify
-
         return self.cause if self.cause is not None else classify(self.reason)
 
     def to_json(self) -> dict[str, str | None]:

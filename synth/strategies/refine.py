@@ -30,7 +30,9 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from synth.errors.estimate import RelationModel
+from synth.errors.chain import chain_between
+from synth.errors.estimate import RelationModel, estimate_errors
+from synth.models.spec import WORLD
 from synth.models.world import World
 from synth.strategies.approach import Candidate
 from synth.strategies.context import PlanContext
@@ -92,10 +94,6 @@ def hole_tilt_problem(ctx: PlanContext) -> Rejection | None:
     is swept names the real cause (a leaning part's margins would otherwise block every
     transport first).
     """
-    from synth.errors.chain import chain_between
-    from synth.errors.estimate import estimate_errors
-    from synth.models.spec import WORLD
-
     chain = chain_between(ctx.graph, WORLD, ctx.hole_frame)
     tilt = estimate_errors(chain, WORLD, ctx.hole_frame).first_order.tilt
     if tilt <= ctx.insertion.dtheta_ok:
