@@ -63,8 +63,7 @@ def _sweep(
 
 
 def _pin_world(ctx: PlanContext, destination: Destination) -> pin.SE3:
-    frames = {al: name for name, al in ctx.graph.al_names.items()}
-    return ctx.graph.world_from(frames[destination.base]) * destination.xf
+    return ctx.graph.world_from(ctx.graph.resolve(destination.base)) * destination.xf
 
 
 def fine_motion_obstruction(
