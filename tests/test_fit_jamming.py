@@ -33,11 +33,16 @@ def _seed_text() -> str:
     return SEED.read_text(encoding="utf-8")
 
 
+def _with_diameters(pin: str, bh1: str) -> str:
+    """seed_4_8 with PIN1's and BH1's diameters changed (the rack hole RH1 stays 0.64 cm)."""
+    text = _seed_text().replace("diameter: 0.635 cm", f"diameter: {pin}")
+    at_bh1 = "pose: {translation: [3.85 cm, 3.20 cm, 4.90 cm]}"
+    head, tail = text.split(at_bh1, 1)
+    return head + at_bh1 + tail.replace("diameter: 0.64 cm", f"diameter: {bh1}", 1)
+
+
 def test_a_pin_wider_than_its_hole_is_refused_at_load_naming_the_fit() -> None:
-    text = _seed_text().replace("diameter: 0.635 cm", "diameter: 0.70 cm")
-    bh1 = "pose: {translation: [3.85 cm, 3.20 cm, 4.90 cm]}"
-    head, tail = text.split(bh1, 1)
-    text = head + bh1 + tail.replace("diameter: 0.64 cm", "diameter: 0.62 cm", 1)
+    text = _with_diameters("0.70 cm", "0.62 cm")
     with pytest.raises(SpecError) as info:
         parse_task(text)
     assert info.value.path == "insertion.hole"
@@ -56,10 +61,7 @@ def test_an_equal_diameter_does_not_fit_and_a_thinner_pin_does() -> None:
 def test_a_pin_wider_than_its_start_hole_is_refused_naming_the_start_hole() -> None:
     # BH1 widened to 0.70 cm takes a 0.66 cm pin, but the rack hole RH1 (0.64 cm) it starts in
     # cannot hold it
-    text = _seed_text().replace("diameter: 0.635 cm", "diameter: 0.66 cm")
-    bh1 = "pose: {translation: [3.85 cm, 3.20 cm, 4.90 cm]}"
-    head, tail = text.split(bh1, 1)
-    text = head + bh1 + tail.replace("diameter: 0.64 cm", "diameter: 0.70 cm", 1)
+    text = _with_diameters("0.66 cm", "0.70 cm")
     with pytest.raises(SpecError) as info:
         parse_task(text)
     assert info.value.path == "insertion.start_hole"
