@@ -24,6 +24,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
 
 from synth.al.names import al_name_problem
+from synth.models.catalog import ARM_MODELS
 from synth.models.contacts import ContactSpec
 from synth.units import parse_quantity, registry
 
@@ -451,33 +452,54 @@ def _joint_rates(order: int) -> Any:
 
 
 class ArmSpec(_Model):
-    """The arm model: the built-in Stanford arm (``model: stanford``) or a URDF.
+    """The arm model: a built-in arm (``model: stanford``, ``ur5``, ``panda``, …) or a URDF.
 
-    ``base`` places the arm's base frame in the world. ``tool_frame`` names the URDF frame that
-    AL's hand frame (BHAND/BMANIP) is bound to, and ``tool_offset`` the hand frame's pose in it
-    (e.g. from a bare flange such as the UR5's ``tool0`` to the point between the finger pads).
-    ``srdf`` lists link pairs whose collisions are disabled (``<disable_collisions>``).
+    ``model`` names the seed's Stanford arm or an arm of example-robot-data under its loader's
+    name (:data:`synth.models.catalog.ARM_MODELS`; installed by the ``robots`` extra); ``urdf``
+    any other arm. ``base`` places the arm's base frame in the world. ``tool_frame`` names the
+    URDF frame that AL's hand frame (BHAND/BMANIP) is bound to, and ``tool_offset`` the hand
+    frame's pose in it (e.g. from a bare flange such as the UR5's ``tool0`` to the point
+    between the finger pads); a built-in arm has defaults for both. ``srdf`` lists link pairs
+    whose collisions are disabled (``<disable_collisions>``). ``fingers`` names a URDF's own
+    finger joints: they become the hand instead of synth's parametric one.
     ``velocity_limits``, ``acceleration_limits``, ``jerk_limits`` override the model's per-joint
     limits (one entry per joint, with units; SI floats inside).
     """
 
-    model: Literal["stanford"] | None = None
+    model: str | None = None
     urdf: str | None = None
     tool_frame: str | None = None
     package_dirs: tuple[str, ...] = ()
     base: Pose = Pose()
     tool_offset: Pose = Pose()
     srdf: str | None = None
+    fingers: tuple[str, ...] = ()
     velocity_limits: Annotated[tuple[float, ...] | None, _joint_rates(1)] = None
     acceleration_limits: Annotated[tuple[float, ...] | None, _joint_rates(2)] = None
     jerk_limits: Annotated[tuple[float, ...] | None, _joint_rates(3)] = None
 
+    @field_validator("model")
+    @classmethod
+    def _known_model(cls, v: str | None) -> str | None:
+        if v is not None and v not in ARM_MODELS:
+            raise ValueError(f"unknown arm model {v!r}; built-in arms: {', '.join(ARM_MODELS)}")
+        return v
+
     @model_validator(mode="after")
     def _one_source(self) -> ArmSpec:
         if (self.model is None) == (self.urdf is None):
-            raise ValueError("name exactly one arm: 'model: stanford' or 'urdf: PATH'")
+            raise ValueError(
+                "name exactly one arm: 'model: NAME' (e.g. stanford, ur5) or 'urdf: PATH'"
+            )
         if self.urdf is not None and not self.tool_frame:
             raise ValueError("a URDF arm needs 'tool_frame', the frame the hand is bound to")
+        if self.model is not None:
+            extra = [f for f in ("srdf", "package_dirs", "fingers") if f in self.model_fields_set]
+            if extra:
+                raise ValueError(
+                    f"a built-in arm ('model: {self.model}') brings its own files and fingers; "
+                    f"remove {', '.join(extra)} or name the URDF with 'urdf:'"
+                )
         return self
 
 

@@ -197,7 +197,7 @@ class ReplayMachine(MotionGate):
     """The Machine protocol on ``arm`` in a true ``workcell`` (see the module docstring).
 
     ``hand_errors`` is the stream of hand positioning errors (:class:`HandErrors.none` for the
-    nominal run); ``hand_start`` the hand's initial pose (true and sensed; the task's park
+    nominal run); ``q_start`` the arm's initial configuration (the hand at the task's park
     frame). Every violation is kept in :attr:`violations` before :class:`ViolationStop` is
     raised.
     """
@@ -207,7 +207,7 @@ class ReplayMachine(MotionGate):
         arm: Arm,
         workcell: Workcell,
         pins: dict[str, pin.SE3],
-        hand_start: pin.SE3,
+        q_start: NDArray[np.float64],
         hand_errors: HandErrors,
         options: ReplayOptions | None = None,
     ) -> None:
@@ -229,10 +229,7 @@ class ReplayMachine(MotionGate):
         self._time = 0.0
         self._opening = 0.0
         self._error = pin.SE3.Identity()
-        try:
-            self._q = solve_near(arm, hand_start, arm.limits.clip(np.zeros(arm.nq)))
-        except ReachProblem as problem:
-            raise ValueError(f"the arm cannot start at its park pose: {problem}") from None
+        self._q = np.array(q_start, dtype=float)
         self._sensed = arm.forward(self._q)
         self._force = np.zeros(3)
         self._torque = np.zeros(3)

@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import NDArray
 
 from synth.al import ast
 from synth.al.binding import WorldBinding, bind_world
@@ -41,13 +42,13 @@ from synth.al.interpreter import Interpreter
 from synth.al.parser import parse_program
 from synth.errors.locate import believed_graph
 from synth.exceptions import ALRuntimeError, SpecError
-from synth.models.arm import Arm, load_arm
+from synth.models.arm import Arm, manipulator_arm
 from synth.models.graph import AttributeGraph, pose_to_se3
 from synth.models.loader import load_task
+from synth.models.park import nominal_environment, park_configuration
 from synth.models.spec import Distribution, TaskSpec
 from synth.models.workcell import WorkcellModel
 from synth.replay.machine import ReplayMachine, ReplayOptions, ViolationStop
-from synth.replay.reach import describe_pose
 from synth.replay.report import OUTCOMES, MonteCarloReport, Outcome, ReplayReport, RunReport
 from synth.replay.trials import TrialPool, iter_trials, job_for
 from synth.replay.truth import HandErrors, TrueWorld, nominal_world, sample_world
@@ -76,7 +77,8 @@ class ReplayContext:
     """Everything a run needs, built once per process.
 
     The parsed program, the task, its world binding, the arm, the workcell's solids, the park
-    pose [m] and the machine's options.
+    pose [m], the arm's configuration there (the planner's start,
+    :func:`synth.models.park.park_configuration`) and the machine's options.
     """
 
     program: ast.Program
@@ -86,6 +88,7 @@ class ReplayContext:
     arm: Arm
     workcell: WorkcellModel
     park: pin.SE3
+    q_park: NDArray[np.float64]
     options: ReplayOptions
 
 
@@ -114,15 +117,12 @@ def build_context(
     manipulator = spec.manipulator
     if manipulator is None:
         raise SpecError("manipulator", "the replay needs the task's manipulator (arm and park)")
-    arm = load_arm(manipulator.arm, manipulator.hand, base_dir)
+    arm = manipulator_arm(manipulator, base_dir)
     park = pose_to_se3(manipulator.park.pose)
-    if not arm.inverse(park):
-        raise SpecError(
-            "manipulator.park",
-            f"the arm cannot reach its park frame {manipulator.park.al_name} "
-            f"({describe_pose(park)}), where the replay starts it",
-        )
     graph = believed_graph(spec)  # a fixture-held box: where its contacts put it
+    q_park = park_configuration(
+        arm, park, nominal_environment(graph, arm), manipulator.park.al_name
+    )
     if distribution is not None:
         graph = AttributeGraph(graph.spec.with_distribution(distribution))
     return ReplayContext(
@@ -133,6 +133,7 @@ def build_context(
         arm=arm,
         workcell=WorkcellModel(graph, [arm.transform_world_base.translation]),
         park=park,
+        q_park=q_park,
         options=options or ReplayOptions(),
     )
 
@@ -141,7 +142,7 @@ def machine_for(context: ReplayContext, world: TrueWorld, hand_errors: HandError
     """A fresh machine in ``world``: the hand at the park pose, every pin where it truly is."""
     workcell = context.workcell.place(world)
     pins = {frame: world.pose(frame) for frame in workcell.pins}
-    return ReplayMachine(context.arm, workcell, pins, context.park, hand_errors, context.options)
+    return ReplayMachine(context.arm, workcell, pins, context.q_park, hand_errors, context.options)
 
 
 def run_machine(context: ReplayContext, machine: ReplayMachine) -> tuple[RunReport, Interpreter]:

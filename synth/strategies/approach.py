@@ -38,9 +38,9 @@ import pinocchio as pin
 from synth.errors.estimate import RelationModel
 from synth.models.world import World
 from synth.strategies.bow import BOW_FRACTION, AxisPath, plan_axis_path
-from synth.strategies.context import Configuration, PlanContext
+from synth.strategies.context import Configuration, PlanContext, hand_at, transform_end_hand
 from synth.strategies.grasp import Pickup
-from synth.strategies.records import Destination, Grasp, PinInHoleStrategy, Rejection
+from synth.strategies.records import Destination, PinInHoleStrategy, Rejection
 from synth.strategies.relations import approach_relation, hole_frame_offset
 
 __all__ = [
@@ -57,16 +57,6 @@ __all__ = [
 APPROACH_CLEARANCE = 1e-3
 """[m] the approach point stays this far above the surface, and the guarded insertion aims
 this far past the seat, beyond the certified Δz (the gross-motion sweeps' clearance)."""
-
-
-def transform_end_hand(ctx: PlanContext, grasp: Grasp) -> pin.SE3:
-    """The hand in the frame of the inserted pin end: ``T_pin_end⁻¹ ∘ T_pin_hand``."""
-    return ctx.transform_pin_end.inverse() * grasp.pin_from_hand()
-
-
-def hand_at(ctx: PlanContext, grasp: Grasp, transform_hole_end: pin.SE3) -> pin.SE3:
-    """World pose of the hand when the pin end is at ``transform_hole_end`` (hole frame)."""
-    return ctx.world_hole * transform_hole_end * transform_end_hand(ctx, grasp)
 
 
 def pin_destination(ctx: PlanContext, label: str, transform_hole_end: pin.SE3) -> Destination:

@@ -21,21 +21,22 @@ from numpy.typing import NDArray
 from synth.errors.bounds import Interval, bound_linear
 from synth.errors.locate import believed_graph
 from synth.errors.parameters import ParameterSpace
-from synth.exceptions import SpecError, UnreachableError
+from synth.exceptions import SpecError
 from synth.models.arm import (
     Arm,
     CollisionScene,
-    load_arm,
+    manipulator_arm,
     motion_time,
     nearest_solution,
-    rank_solutions,
 )
 from synth.models.graph import AttributeGraph, pose_to_se3
 from synth.models.insertion import InsertionParameters, derive, refuse_unprovable
+from synth.models.park import nominal_environment, park_configuration
 from synth.models.spec import HandSpec, HoleShape, PinShape, TaskSpec, Uncertainty
 from synth.models.world import Fact, World
 from synth.strategies.clearance import GrossMotionCheck
 from synth.strategies.options import PlanOptions
+from synth.strategies.records import Grasp
 
 Configuration = NDArray[np.float64]
 PinEnd = Literal["tip", "head"]
@@ -162,6 +163,16 @@ class PlanContext:
         return bound_linear(objective, space)
 
 
+def transform_end_hand(ctx: PlanContext, grasp: Grasp) -> pin.SE3:
+    """The hand in the frame of the inserted pin end: ``T_pin_end⁻¹ ∘ T_pin_hand``."""
+    return ctx.transform_pin_end.inverse() * grasp.pin_from_hand()
+
+
+def hand_at(ctx: PlanContext, grasp: Grasp, transform_hole_end: pin.SE3) -> pin.SE3:
+    """World pose of the hand when the pin end is at ``transform_hole_end`` (hole frame)."""
+    return ctx.world_hole * transform_hole_end * transform_end_hand(ctx, grasp)
+
+
 def _require(spec: TaskSpec) -> None:
     if spec.insertion is None:
         raise SpecError("insertion", "synth plan needs an 'insertion' section (pin and hole)")
@@ -219,19 +230,11 @@ def build_context(
     hole_shape = graph.nodes[insertion.hole].shape
     assert isinstance(pin_shape, PinShape) and isinstance(hole_shape, HoleShape)
     manip = spec.manipulator
-    arm = load_arm(manip.arm, manip.hand, base_dir)
+    arm = manipulator_arm(manip, base_dir)
     park = pose_to_se3(manip.park.pose)
     counters = PlanCounters()
     counters.ik += 1
-    found = arm.inverse(park)
-    if not found:
-        t = park.translation
-        raise UnreachableError(
-            (float(t[0]), float(t[1]), float(t[2])),
-            tuple(float(v) for v in park.rotation.reshape(-1)),
-            f"the park frame {manip.park.al_name} has no arm solution",
-        )
-    q_park = rank_solutions(arm, found)[0].q
+    q_park = park_configuration(arm, park, nominal_environment(graph, arm), manip.park.al_name)
     d_i = start_depth(graph, insertion.start_hole, insertion.pin)
     end: PinEnd = "tip" if insertion.direction == "parallel" else "head"
     pin_al = graph.al_names[insertion.pin]
@@ -256,7 +259,7 @@ def build_context(
         start_hole=insertion.start_hole,
         pin_shape=pin_shape,
         hole_shape=hole_shape,
-        hand=manip.hand,
+        hand=arm.hand,
         hand_al=manip.al_name,
         hand_error=manip.hand_error,
         park=park,

@@ -40,10 +40,10 @@ from synth.errors.bounds import bound_linear
 from synth.errors.chain import ErrorChain, Fixed, Perturbation, Term
 from synth.errors.estimate import RelationModel, estimate_errors
 from synth.errors.parameters import ParameterBlock
-from synth.models.arm import SEED_GRASP_RATING
+from synth.models.arm import grasp_rating
 from synth.models.spec import HandSpec, PinShape
 from synth.models.world import World
-from synth.strategies.context import Configuration, PinEnd, PlanContext
+from synth.strategies.context import Configuration, PinEnd, PlanContext, hand_at
 from synth.strategies.options import PlanOptions
 from synth.strategies.records import Destination, Grasp, GraspStrategy, Rejection
 
@@ -460,6 +460,7 @@ def generate_pickups(
         )
         return [], rejected
     pickups: list[Pickup] = []
+    rate = grasp_rating(ctx.arm)
     omegas = [k * opts.omega_step for k in range(round(2 * math.pi / opts.omega_step))]
     for gamma in grasp_angles(same_end, opts):
         for d in distances:
@@ -487,7 +488,9 @@ def generate_pickups(
                     rejected.append(found)
                     continue
                 q_approach, q_grasp = found
-                rating = float(SEED_GRASP_RATING(ctx.arm, q_grasp))
+                rating = float(
+                    rate(ctx.arm, [q_grasp, q_approach, *seat_configuration(ctx, grasp, q_grasp)])
+                )
                 rated.append((rating, k, grasp, q_approach, q_grasp, centering, opening))
             # Ratings equal to 1e-9 rad are ties (γ = 180°: θ5 does not depend on ω); ties keep
             # the ω order, so float noise cannot decide which ω survive the pruning.
@@ -497,7 +500,7 @@ def generate_pickups(
                 rejected.append(
                     Rejection(
                         grasp_label(grasp),
-                        f"pruned: rating |45° − θ5| = {math.degrees(cost):.1f}°, only the best "
+                        f"pruned: rating {rate.describe(cost)}, only the best "
                         f"{opts.keep_omegas} ω are kept (seed L2122; --try-harder keeps all)",
                     )
                 )
@@ -510,6 +513,19 @@ def generate_pickups(
                 else:
                     pickups.append(made)
     return pickups, rejected
+
+
+def seat_configuration(
+    ctx: PlanContext, grasp: Grasp, q_grasp: Configuration
+) -> list[Configuration]:
+    """The arm with the pin seated d_f deep in the target hole at φ = 0, if it reaches there.
+
+    For a grasp rating over the whole motion (the approach strategy chooses φ later): [] when
+    the arm has no configuration there.
+    """
+    seat = hand_at(ctx, grasp, _translation(-ctx.insertion.d_f))
+    q = ctx.nearest(seat, q_grasp)
+    return [] if q is None else [q]
 
 
 def reached_grasp(

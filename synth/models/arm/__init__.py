@@ -29,14 +29,22 @@ from synth.models.arm.ik import IKOptions, IKProblem, IKResult, build_ik, solve_
 from synth.models.arm.limits import QUINTIC_PEAK_TO_AVERAGE, JointLimits
 from synth.models.arm.rating import (
     SEED_GRASP_RATING,
+    DexterityRating,
+    GraspRating,
     JointAngleRating,
     JointMarginRating,
     RatedSolution,
+    SeedGraspRating,
     SolutionRating,
+    WorstDexterityRating,
     best_solution,
+    dexterity,
+    grasp_rating,
     nearest_solution,
     rank_solutions,
+    solution_rating,
 )
+from synth.models.arm.robots import load_builtin_arm
 from synth.models.arm.stanford import (
     StanfordParameters,
     build_stanford_arm,
@@ -62,8 +70,9 @@ from synth.models.arm.timing import (
     seed_motion_time,
 )
 from synth.models.arm.urdf import example_robot_data_dir, load_urdf_arm
+from synth.models.catalog import BUILTIN_ARMS
 from synth.models.graph import pose_to_se3
-from synth.models.spec import ArmSpec, HandSpec
+from synth.models.spec import ArmSpec, HandSpec, ManipulatorSpec
 
 __all__ = [
     "FINGERS",
@@ -78,6 +87,8 @@ __all__ = [
     "Clearance",
     "ClosedFormInverse",
     "CollisionScene",
+    "DexterityRating",
+    "GraspRating",
     "HeldObject",
     "IKOptions",
     "IKProblem",
@@ -89,25 +100,31 @@ __all__ = [
     "MotionTime",
     "Obstacle",
     "RatedSolution",
+    "SeedGraspRating",
     "SolutionRating",
     "StanfordParameters",
     "SweepOptions",
     "SweepResult",
     "TimingOptions",
+    "WorstDexterityRating",
     "best_solution",
     "build_ik",
     "build_stanford_arm",
     "coal_geometry",
+    "dexterity",
     "example_robot_data_dir",
     "grasp_contacts",
+    "grasp_rating",
     "load_arm",
     "load_stanford_parameters",
     "load_urdf_arm",
+    "manipulator_arm",
     "motion_time",
     "nearest_solution",
     "plan_trajectory",
     "rank_solutions",
     "seed_motion_time",
+    "solution_rating",
     "solve_ik",
     "solve_ik_all",
     "stanford_inverse",
@@ -126,20 +143,52 @@ def _override(values: tuple[float, ...] | None, n: int, field: str) -> np.ndarra
     return np.array(values)
 
 
+def manipulator_arm(manipulator: ManipulatorSpec, base_dir: Path | str | None = None) -> Arm:
+    """The task's arm with its hand: the ``hand`` section only when the task gives one.
+
+    The planner and the replay build the arm through here, so both see the same hand.
+    """
+    given = "hand" in manipulator.model_fields_set
+    return load_arm(manipulator.arm, manipulator.hand if given else None, base_dir)
+
+
 def load_arm(
     arm_spec: ArmSpec, hand: HandSpec | None = None, base_dir: Path | str | None = None
 ) -> Arm:
-    """Build the arm a task names: ``model: stanford`` or ``urdf: PATH`` with its tool frame.
+    """Build the arm a task names: ``model: NAME`` or ``urdf: PATH`` with its tool frame.
 
     The Stanford arm stands at the spec's ``base`` when given, else at the parameter file's
-    ``default_base`` (placed for the seed's workcell). Relative URDF, SRDF and package paths
+    ``default_base`` (placed for the seed's workcell). Built-in URDF arms (``ur5``, ``panda``,
+    …) come from example-robot-data (:mod:`.robots`). Relative URDF, SRDF and package paths
     are resolved against ``base_dir`` (the task file's directory; default: the working
-    directory). Rate-limit overrides must give one value per joint.
+    directory). Rate-limit overrides must give one value per joint. ``hand`` is synth's
+    parametric hand (default :class:`HandSpec`); an arm with its own fingers refuses one.
     """
     hand_spec = hand if hand is not None else HandSpec()
     root = Path(base_dir) if base_dir is not None else Path.cwd()
     base = pose_to_se3(arm_spec.base) if "base" in arm_spec.model_fields_set else None
     offset = pose_to_se3(arm_spec.tool_offset)
+    given_offset = offset if "tool_offset" in arm_spec.model_fields_set else None
+    fingered = arm_spec.fingers or (
+        arm_spec.model in BUILTIN_ARMS and BUILTIN_ARMS[arm_spec.model].fingers
+    )
+    if fingered and hand is not None:
+        raise ArmModelError(
+            "this arm has its own fingers, which define the hand's opening and pads; "
+            "remove the 'hand' section",
+            "manipulator.hand",
+        )
+    if arm_spec.model in BUILTIN_ARMS:
+        return load_builtin_arm(
+            arm_spec.model,
+            hand_spec,
+            transform_world_base=base,
+            tool_frame=arm_spec.tool_frame,
+            tool_offset=given_offset,
+            velocity=arm_spec.velocity_limits,
+            acceleration=arm_spec.acceleration_limits,
+            jerk=arm_spec.jerk_limits,
+        )
     if arm_spec.model == "stanford":
         arm = build_stanford_arm(hand_spec, base, tool_offset=offset)
         n = arm.nq
@@ -163,4 +212,5 @@ def load_arm(
         velocity=arm_spec.velocity_limits,
         acceleration=arm_spec.acceleration_limits,
         jerk=arm_spec.jerk_limits,
+        fingers=arm_spec.fingers,
     )

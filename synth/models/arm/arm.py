@@ -3,13 +3,14 @@
 The base placement T_world_base is folded into the model (the first joints' placements and the
 fixed base frames), so forward kinematics gives the hand frame directly in the world frame, the
 frame the task and AL programs use. Inverse kinematics dispatches to the arm's closed form when
-it has one (the Stanford arm, seed eqs. 14–32) and to the damped-least-squares solver otherwise.
+it has one (the Stanford arm, seed eqs. 14–32; UR arms, :mod:`.ur`) and to the
+damped-least-squares solver otherwise.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Protocol
 
 import numpy as np
 import pinocchio as pin
@@ -19,8 +20,19 @@ from synth.models.arm.bodies import Body
 from synth.models.arm.limits import JointLimits
 from synth.models.spec import HandSpec
 
-ClosedFormInverse = Callable[[pin.SE3], list[NDArray[np.float64]]]
-"""T_world_hand ↦ every attainable configuration (empty when none)."""
+
+class ClosedFormInverse(Protocol):
+    """T_world_hand ↦ every attainable configuration (empty when none).
+
+    ``hint`` is the configuration the arm comes from: an inverse whose joints turn through more
+    than 2π returns each solution at the whole-turn alias nearest it (:mod:`.ur`).
+    """
+
+    def __call__(
+        self, transform_world_hand: pin.SE3, hint: ArrayLike | None = None
+    ) -> list[NDArray[np.float64]]:
+        """Every attainable solution."""
+        ...
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -92,7 +104,7 @@ class Arm:
         are reproducible).
         """
         if self.closed_form is not None:
-            return self.closed_form(transform_world_hand)
+            return self.closed_form(transform_world_hand, hint=hint)
         from synth.models.arm.ik import build_ik, solve_ik_all
 
         problem = build_ik(self, transform_world_hand, hint=hint)

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Any, Literal, TypeAlias, cast
+from typing import Any, TypeAlias
 
 import coal
 import numpy as np
@@ -35,7 +35,7 @@ from numpy.typing import ArrayLike, NDArray
 from synth.exceptions import ArmModelError
 from synth.models.arm.arm import Arm
 from synth.models.arm.bodies import Body
-from synth.models.arm.hand import FINGERS, finger_placement
+from synth.models.arm.hand import FINGERS
 from synth.models.arm.sweep import body_motion_bounds, pair_motion_bounds
 
 Geometry: TypeAlias = "coal.CollisionGeometry | trimesh.Trimesh"
@@ -204,10 +204,15 @@ class CollisionScene:
         arm, hand = self.arm, self.arm.hand
         hand_frame = arm.model.frames[arm.hand_frame]
         bodies = []
+        # An arm's finger bodies stand at full opening; at opening w each slides back
+        # (w − w_max)/2 along the hand's x, towards the other (parametric or URDF fingers).
+        joint_from_hand = hand_frame.placement
         for body in arm.bodies:
             if body.name in FINGERS:
-                side = cast(Literal[-1, 1], -1 if body.name == FINGERS[0] else 1)
-                placement = hand_frame.placement * finger_placement(hand, side, self.opening)
+                side = -1.0 if body.name == FINGERS[0] else 1.0
+                shift = side * (self.opening - hand.max_opening) / 2
+                slide = pin.SE3(np.eye(3), np.array([shift, 0.0, 0.0]))
+                placement = joint_from_hand * slide * joint_from_hand.inverse() * body.placement
                 body = Body(body.name, body.joint, body.link, placement, body.geometry, body.role)
             bodies.append(body)
         if self.held is not None:

@@ -31,7 +31,7 @@ import coal
 import numpy as np
 import pinocchio as pin
 import yaml
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 from pydantic import ValidationError
 
 from synth.exceptions import ArmModelError, SynthError
@@ -402,8 +402,14 @@ class StanfordInverse:
         object.__setattr__(self, "_base_inv", self.transform_world_base.inverse())
         object.__setattr__(self, "_tool_inv", self.tool_offset.inverse())
 
-    def __call__(self, transform_world_hand: pin.SE3) -> list[NDArray[np.float64]]:
-        """Every attainable solution (seed eqs. 14–32 and the joint limits)."""
+    def __call__(
+        self, transform_world_hand: pin.SE3, hint: ArrayLike | None = None
+    ) -> list[NDArray[np.float64]]:
+        """Every attainable solution (seed eqs. 14–32 and the joint limits).
+
+        ``hint`` is unused: no Stanford joint turns through more than 2π (L963), so a solution
+        has no whole-turn aliases to choose among.
+        """
         t = self._base_inv * transform_world_hand * self._tool_inv  # type: ignore[attr-defined]
         return stanford_inverse(self.params, t.rotation, t.translation)
 

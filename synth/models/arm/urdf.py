@@ -21,6 +21,7 @@ import pinocchio as pin
 from synth.exceptions import ArmModelError
 from synth.models.arm.arm import Arm
 from synth.models.arm.bodies import Body
+from synth.models.arm.fingers import FingerJoint, urdf_hand
 from synth.models.arm.hand import hand_bodies
 from synth.models.arm.limits import JointKind, JointLimits
 from synth.models.spec import HandSpec
@@ -118,8 +119,14 @@ def load_urdf_arm(
     velocity: Sequence[float] | None = None,
     acceleration: Sequence[float] | None = None,
     jerk: Sequence[float] | None = None,
+    fingers: Sequence[str] = (),
 ) -> Arm:
-    """Build an :class:`Arm` from a URDF (see the module docstring for the rules)."""
+    """Build an :class:`Arm` from a URDF (see the module docstring for the rules).
+
+    ``fingers`` names the URDF's own finger joints: they are locked closed, and their links'
+    shapes become the hand (:mod:`synth.models.arm.fingers`) instead of synth's parametric hand,
+    whose ``hand`` spec is then ignored (the caller refuses one given explicitly).
+    """
     path = Path(urdf)
     source = str(path)
     if not path.is_file():
@@ -131,17 +138,27 @@ def load_urdf_arm(
         )
     except (RuntimeError, ValueError) as exc:
         raise ArmModelError(f"cannot build the model: {exc}", source) from None
-    kinds = joint_kinds(model, source)
     if not model.existFrame(tool_frame):
         known = ", ".join(f.name for f in model.frames if f.type == pin.FrameType.BODY)
         raise ArmModelError(f"no frame {tool_frame!r}; body frames: {known}", source)
+    offset = pin.SE3.Identity() if tool_offset is None else tool_offset
+    finger_joints = _finger_joints(model, tool_frame, offset, fingers, source)
+    if finger_joints:
+        locked = [model.getJointId(f.name) for f in finger_joints]
+        model, geometry = pin.buildReducedModel(model, geometry, locked, pin.neutral(model))
+    kinds = joint_kinds(model, source)
     t_wb = pin.SE3.Identity() if transform_world_base is None else transform_world_base
     place_base(model, geometry, t_wb)
 
     tool = model.frames[model.getFrameId(tool_frame)]
-    hand_placement = tool.placement * (pin.SE3.Identity() if tool_offset is None else tool_offset)
+    hand_placement = tool.placement * offset
     hand_id = model.addFrame(
         pin.Frame(HAND_FRAME, tool.parentJoint, 0, hand_placement, pin.FrameType.OP_FRAME)
+    )
+    gripper = (
+        urdf_hand(model, geometry, hand_id, tool.name, finger_joints, source)
+        if finger_joints
+        else None
     )
 
     n = model.nq
@@ -168,6 +185,7 @@ def load_urdf_arm(
     except ArmModelError as exc:
         raise ArmModelError(exc.message, source) from None
 
+    replaced = gripper.geometry_names if gripper is not None else frozenset()
     bodies = [
         Body(
             obj.name,
@@ -178,9 +196,15 @@ def load_urdf_arm(
             "arm",
         )
         for obj in geometry.geometryObjects
+        if obj.name not in replaced
     ]
-    hand_link = model.frames[model.getFrameId(tool_frame)].name
-    bodies += hand_bodies(hand, int(tool.parentJoint), hand_link, hand_placement, hand.max_opening)
+    if gripper is not None:
+        hand = gripper.hand
+        bodies += gripper.bodies
+    else:
+        bodies += hand_bodies(
+            hand, int(tool.parentJoint), tool.name, hand_placement, hand.max_opening
+        )
     return Arm(
         name=model.name or path.stem,
         model=model,
@@ -191,3 +215,48 @@ def load_urdf_arm(
         transform_world_base=t_wb,
         disabled_pairs=disabled_link_pairs(srdf) if srdf is not None else frozenset(),
     )
+
+
+def _finger_joints(
+    model: pin.Model, tool_frame: str, tool_offset: pin.SE3, names: Sequence[str], source: str
+) -> list[FingerJoint]:
+    """The named finger joints: prismatic, with their child link, travel and axis in the hand.
+
+    The axis is measured, not read from the joint type: the finger link's displacement in the
+    hand frame per metre of joint travel, from the neutral configuration (finger closed).
+    """
+    joints: list[FingerJoint] = []
+    data = model.createData()
+    q0 = pin.neutral(model)
+
+    def finger_in_hand(q: np.ndarray, link: int) -> np.ndarray:
+        pin.framesForwardKinematics(model, data, q)
+        hand = data.oMf[model.getFrameId(tool_frame)] * tool_offset
+        return hand.actInv(data.oMf[link]).translation
+
+    for name in names:
+        if not model.existJointName(name):
+            raise ArmModelError(f"no finger joint {name!r}", source)
+        j = model.getJointId(name)
+        if model.joints[j].shortname() not in _PRISMATIC:
+            raise ArmModelError(f"finger joint {name!r} is not prismatic", source)
+        links = [
+            k
+            for k, f in enumerate(model.frames)
+            if f.parentJoint == j and f.type == pin.FrameType.BODY
+        ]
+        if not links:
+            raise ArmModelError(f"finger joint {name!r} carries no link", source)
+        step = 1e-3
+        q1 = q0.copy()
+        q1[model.idx_qs[j]] += step
+        axis = (finger_in_hand(q1, links[0]) - finger_in_hand(q0, links[0])) / step
+        joints.append(
+            FingerJoint(
+                name,
+                model.frames[links[0]].name,
+                float(model.upperPositionLimit[model.idx_qs[j]]),
+                axis,
+            )
+        )
+    return joints

@@ -1,0 +1,62 @@
+"""Where the arm starts: a collision-free configuration at the task's park frame.
+
+A program starts with the hand at the park frame (BPARK), empty and closed. Which of the arm's
+configurations at that pose it stands in matters: the planner's first swept motion starts from
+it, and the replay must start from the same one. :func:`park_configuration` is the one rule
+both use:
+
+1. every attainable inverse solution at the park frame (closed form: all branches; DLS: the
+   distinct solutions of its starts);
+2. those whose bodies touch nothing of the nominal workcell (table, boxes, fixtures, the
+   standing pins) and not themselves, fingers closed;
+3. the best by the arm's own rating (:func:`synth.models.arm.rating.solution_rating`: the
+   seed's θ5 rule for the Stanford arm, the dexterity otherwise), ties in solver order.
+
+With the base on the table, an arm's fixed base link touches it by construction; that pair is
+never checked (both fixed). Every other contact disqualifies a configuration, and when none is
+left the error names the contacts of each.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+from numpy.typing import NDArray
+
+from synth.exceptions import SpecError
+from synth.models.arm import Arm, CollisionScene, Obstacle, rank_solutions
+from synth.models.graph import AttributeGraph
+from synth.models.workcell import NominalPoses, WorkcellModel
+
+FIELD = "manipulator.park"
+
+
+def nominal_environment(graph: AttributeGraph, arm: Arm) -> list[Obstacle]:
+    """The believed workcell's solids and standing pins (the planner's and the start's world)."""
+    model = WorkcellModel(graph, [arm.transform_world_base.translation])
+    workcell = model.place(NominalPoses(graph))
+    pins = [model.pin_obstacle(frame, graph.world_from(frame)) for frame in model.pins]
+    return [*workcell.obstacles, *pins]
+
+
+def park_configuration(
+    arm: Arm, park: pin.SE3, environment: list[Obstacle], al_name: str = "BPARK"
+) -> NDArray[np.float64]:
+    """The arm's start at ``park`` (module docstring); :class:`SpecError` naming the park."""
+    solutions = arm.inverse(park)
+    x, y, z = (100 * float(v) for v in park.translation)
+    where = f"the park frame {al_name} at ({x:.1f}, {y:.1f}, {z:.1f}) cm"
+    if not solutions:
+        raise SpecError(FIELD, f"the arm has no configuration reaching {where}")
+    scene = CollisionScene(arm, environment, opening=0.0)
+    clear = [q for q in solutions if not scene.in_collision(q)]
+    if not clear:
+        touching = "; ".join(
+            ", ".join(f"{a}/{b}" for a, b in scene.collisions(q)[:3]) for q in solutions[:4]
+        )
+        raise SpecError(
+            FIELD,
+            f"every one of the arm's {len(solutions)} configurations at {where} touches "
+            f"something ({touching}); move the park frame or the arm's base",
+        )
+    return rank_solutions(arm, clear)[0].q
