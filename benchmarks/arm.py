@@ -1,9 +1,11 @@
 """Time the arm layer: kinematics, closed-form and DLS inverse, collisions, swept check, timing.
 
 Usage: python benchmarks/arm.py [--repeat N]
-Prints microseconds per call (median) for the Stanford arm and, when the optional
-``example-robot-data`` package is installed, the UR5; ratio columns compare each operation with
-one forward-kinematics call on the same arm, and the DLS inverse with the closed form.
+Prints microseconds per call (median) for the Stanford arm and the built-in UR5 (closed form by
+``ur_analytic_ik``) and Panda (7 joints, DLS, its own fingers) from the ``robots`` extra; ratio
+columns compare each operation with one forward-kinematics call on the same arm, and the DLS
+inverse with the closed form. ``arm.inverse`` with a hint is the call the planner and the
+replay make for every target (the hint's own descent first, :mod:`synth.models.arm.ik`).
 The scene is the seed's workcell: a table slab and the seed's box; the swept check carries the
 hand 25 cm past a 1 mm plate (blocked) and, with the plate moved away, through free space.
 """
@@ -70,6 +72,8 @@ def bench_arm(name: str, arm: Arm, home: np.ndarray, repeat: int) -> list[tuple[
         rows.append((f"{name}: closed-form IK (all solutions)", cf, f"{cf / fk:.1f}"))
     else:
         cf = math.nan
+    near = per_call_us(lambda: arm.inverse(target, hint=q1 + 0.05), repeat)
+    rows.append((f"{name}: arm.inverse with a hint (planner, replay)", near, f"{near / fk:.1f}"))
     hinted = build_ik(arm, target, IKOptions(starts=1), hint=q1 + 0.05)
     dls1 = per_call_us(lambda: solve_ik(hinted, rng), repeat)
     rows.append((f"{name}: DLS IK, 1 start near the answer", dls1, f"{dls1 / fk:.1f}"))
@@ -106,21 +110,14 @@ def main() -> None:
     args = parser.parse_args()
     stanford_home = np.array([0.0, -1.6, 0.5, 0.0, 1.5, 0.0])
     rows = bench_arm("stanford", build_stanford_arm(HandSpec()), stanford_home, args.repeat)
-    robots = example_robot_data_dir()
-    if robots is not None:
-        ur = robots / "ur_description"
-        spec = ArmSpec(
-            urdf=str(ur / "urdf" / "ur5_robot.urdf"),
-            tool_frame="tool0",
-            package_dirs=(str(robots.parent.parent),),
-            srdf=str(ur / "srdf" / "ur5.srdf"),
-            base={"translation": ["20 cm", "80 cm", "0 cm"]},
-            tool_offset={"translation": ["0 cm", "0 cm", "8.08 cm"]},
-        )
-        ur5_home = np.array([0.8, -1.2, 1.8, -2.2, -1.57, 0.0])  # elbow up, hand down
-        rows += bench_arm("ur5", load_arm(spec), ur5_home, args.repeat)
-    else:
-        print("(example-robot-data not installed: UR5 rows skipped)")
+    if example_robot_data_dir() is None:
+        raise SystemExit("example-robot-data is not installed: pip install -e '.[robots]'")
+    base = {"translation": ["20 cm", "80 cm", "0 cm"]}
+    ur5_home = np.array([0.8, -1.2, 1.8, -2.2, -1.57, 0.0])  # elbow up, hand down
+    rows += bench_arm("ur5", load_arm(ArmSpec(model="ur5", base=base)), ur5_home, args.repeat)
+    panda_home = np.array([0.9, 0.3, 0.0, -2.0, 0.0, 2.3, 0.785])  # hand down, forward
+    panda = load_arm(ArmSpec(model="panda", base=base))
+    rows += bench_arm("panda", panda, panda_home, args.repeat)
     print(f"{'operation':48}{'µs/call':>12}{'× FK':>16}")
     for label, us, ratio in rows:
         print(f"{label:48}{us:12.1f}{ratio:>16}")

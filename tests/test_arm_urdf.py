@@ -19,13 +19,20 @@ from synth.models.arm import (
     load_urdf_arm,
     solve_ik,
 )
+from synth.models.catalog import ROBOTS_EXTRA
 from synth.models.spec import ArmSpec, HandSpec
 
 ROBOTS = example_robot_data_dir()
-needs_ur5 = pytest.mark.skipif(
-    ROBOTS is None,
-    reason="example-robot-data is not installed (optional extra: pip install '.[robots]')",
-)
+
+
+@pytest.fixture
+def _robots() -> None:
+    # make test installs the robots extra: a missing package is a failure, not a skip.
+    if ROBOTS is None:
+        pytest.fail(f"example-robot-data is not installed: {ROBOTS_EXTRA}")
+
+
+needs_ur5 = pytest.mark.usefixtures("_robots")
 
 L1, L2 = 0.4, 0.3  # [m] link lengths of the planar test arm
 

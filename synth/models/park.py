@@ -13,12 +13,15 @@ both use:
    seed's θ5 rule for the Stanford arm, the dexterity otherwise), ties in solver order.
 
 With the base on the table, an arm's fixed base link touches it by construction; that pair is
-never checked (both fixed). Every other contact disqualifies a configuration, and when none is
-left the error names the contacts of each.
+never checked (both fixed). A fixed base link inside any other solid (a box, a fixture, a pin)
+is a task error, checked first: the scene never checks fixed pairs, so nothing later would.
+Every other contact disqualifies a configuration, and when none is left the error names the
+contacts of each.
 """
 
 from __future__ import annotations
 
+import coal
 import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
@@ -26,7 +29,7 @@ from numpy.typing import NDArray
 from synth.exceptions import SpecError
 from synth.models.arm import Arm, CollisionScene, Obstacle, rank_solutions
 from synth.models.graph import AttributeGraph
-from synth.models.workcell import NominalPoses, WorkcellModel
+from synth.models.workcell import TABLE, NominalPoses, WorkcellModel
 
 FIELD = "manipulator.park"
 
@@ -39,10 +42,33 @@ def nominal_environment(graph: AttributeGraph, arm: Arm) -> list[Obstacle]:
     return [*workcell.obstacles, *pins]
 
 
+def base_overlaps(arm: Arm, environment: list[Obstacle]) -> list[tuple[str, str]]:
+    """(fixed arm body, solid) pairs in contact, the table excepted (the base stands on it)."""
+    fixed = [b for b in arm.bodies if b.joint == 0]
+    out = []
+    for body in fixed:
+        body_pose = coal.Transform3s(body.placement.rotation, body.placement.translation)
+        for obstacle in environment:
+            if obstacle.name == TABLE:
+                continue
+            pose = coal.Transform3s(obstacle.pose.rotation, obstacle.pose.translation)
+            result = coal.CollisionResult()
+            coal.collide(
+                body.geometry, body_pose, obstacle.geometry, pose, coal.CollisionRequest(), result
+            )
+            if result.isCollision():
+                out.append((body.name, obstacle.name))
+    return out
+
+
 def park_configuration(
     arm: Arm, park: pin.SE3, environment: list[Obstacle], al_name: str = "BPARK"
 ) -> NDArray[np.float64]:
     """The arm's start at ``park`` (module docstring); :class:`SpecError` naming the park."""
+    overlaps = base_overlaps(arm, environment)
+    if overlaps:
+        pairs = ", ".join(f"{a} inside {b}" for a, b in overlaps)
+        raise SpecError("manipulator.arm.base", f"the arm's base stands in a part: {pairs}")
     solutions = arm.inverse(park)
     x, y, z = (100 * float(v) for v in park.translation)
     where = f"the park frame {al_name} at ({x:.1f}, {y:.1f}, {z:.1f}) cm"

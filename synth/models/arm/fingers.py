@@ -62,7 +62,7 @@ def _mesh(geometry: coal.CollisionGeometry) -> trimesh.Trimesh:
     if isinstance(geometry, coal.Sphere):
         return trimesh.creation.icosphere(radius=geometry.radius)
     if isinstance(geometry, coal.BVHModelBase):
-        vertices = np.array([geometry.vertices(i) for i in range(geometry.num_vertices)])
+        vertices = np.asarray(geometry.vertices(), dtype=float)
         faces = np.array(
             [[geometry.tri_indices(i)[k] for k in range(3)] for i in range(geometry.num_tris)]
         )

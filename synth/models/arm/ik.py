@@ -10,7 +10,11 @@ clipped to ``max_step`` and then into the joint limits. Sugihara takes c = ½; c
 converged faster on the Stanford arm and the UR5 (more starts converge, in fewer iterations).
 A start is abandoned when its error has not halved over ``stall_iterations`` iterations.
 Starts are the hint (if any) and configurations drawn uniformly inside the limits from the
-caller's ``np.random.Generator``.
+caller's ``np.random.Generator``. With a hint the descent from the hint runs first, and when it
+converges its solution is the answer (``hint_first``): a move's next target is a small step
+from where the arm is, the descent stays on the arm's branch (for a redundant arm such as the
+Panda, on the nearby part of its self-motion manifold), and the nearest-solution rule would
+pick it anyway. The random starts run only when it fails, or without a hint (the park).
 :func:`build_ik` returns the problem; :func:`solve_ik` solves it and raises
 :class:`~synth.exceptions.NoSolutionFound` carrying problem and result when no start converges.
 
@@ -20,6 +24,7 @@ Levenberg–Marquardt method", IEEE Trans. Robotics 27(5), 2011.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -55,6 +60,8 @@ class IKOptions:
     """[rad | m] largest joint change per iteration (∞-norm)."""
     distinct: float = 1e-6
     """[rad | m] converged configurations closer than this (∞-norm) are one solution."""
+    hint_first: bool = True
+    """With a hint, return the hint's own converged descent without running the other starts."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -109,11 +116,12 @@ def _run(problem: IKProblem, data: pin.Data, q0: NDArray[np.float64]) -> IKAttem
     eye6 = np.eye(6)
     history: list[float] = []
     for it in range(opts.max_iterations + 1):
-        pin.forwardKinematics(model, data, q)
+        # One kinematics pass gives both the pose and the Jacobian (joint Jacobians include FK).
+        pin.computeJointJacobians(model, data, q)
         current = pin.updateFramePlacement(model, data, frame)
         error_pose = target_inv * current  # T_target⁻¹·T_hand
         e = pin.log6(error_pose).vector
-        ep, er = float(np.linalg.norm(e[:3])), float(np.linalg.norm(e[3:]))
+        ep, er = math.sqrt(float(e[:3] @ e[:3])), math.sqrt(float(e[3:] @ e[3:]))
         if ep < opts.position_tolerance and er < opts.rotation_tolerance:
             return IKAttempt(q, ep, er, it, True)
         history.append(ep + er)
@@ -121,14 +129,14 @@ def _run(problem: IKProblem, data: pin.Data, q0: NDArray[np.float64]) -> IKAttem
             it >= opts.stall_iterations and history[-1] > 0.5 * history[-1 - opts.stall_iterations]
         ):
             return IKAttempt(q, ep, er, it, False)
-        jac = pin.computeFrameJacobian(model, data, q, frame, pin.LOCAL)
+        jac = pin.getFrameJacobian(model, data, frame, pin.LOCAL)
         je = pin.Jlog6(error_pose) @ jac
         lam = opts.error_damping * float(e @ e) + opts.damping
         dq = -je.T @ np.linalg.solve(je @ je.T + lam * eye6, e)
-        biggest = float(np.max(np.abs(dq)))
+        biggest = float(np.abs(dq).max())
         if biggest > opts.max_step:
             dq *= opts.max_step / biggest
-        q = np.clip(q + dq, lim.lower, lim.upper)
+        q = np.minimum(np.maximum(q + dq, lim.lower), lim.upper)
     raise AssertionError("unreachable")
 
 
@@ -139,6 +147,10 @@ def solve_ik(problem: IKProblem, rng: np.random.Generator) -> IKResult:
     n_random = max(opts.starts - len(starts), 0)
     starts += list(rng.uniform(lim.lower, lim.upper, size=(n_random, lim.n)))
     data = problem.model.createData()
+    if problem.hint is not None and opts.hint_first:
+        first = _run(problem, data, problem.hint)
+        if first.converged:
+            return IKResult((first.q,), first, 1)
     solutions: list[NDArray[np.float64]] = []
     best: IKAttempt | None = None
     runs = 0

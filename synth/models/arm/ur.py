@@ -66,20 +66,22 @@ class URInverse:
         """Every attainable solution, each joint at its alias nearest ``hint`` when given."""
         dh_inv, hand_inv = self._inverse
         target = (dh_inv * transform_world_hand * hand_inv).homogeneous
+        raw = self.solver.inverse_kinematics(np.ascontiguousarray(target))
+        if not raw:
+            return []
+        q = np.array(raw, dtype=float)  # (k, 6), one branch a row
         lower, upper = self.limits.lower, self.limits.upper
-        near = None if hint is None else np.asarray(hint, dtype=float)
-        out: list[NDArray[np.float64]] = []
-        for raw in self.solver.inverse_kinematics(np.ascontiguousarray(target)):
-            q = np.asarray(raw, dtype=float)
-            if near is not None:
-                q = q + 2 * math.pi * np.round((near - q) / (2 * math.pi))
-                # the nearest alias may lie past a stop; step back one turn towards the range
-                q = np.where(q > upper, q - 2 * math.pi, q)
-                q = np.where(q < lower, q + 2 * math.pi, q)
-            inside = bool(np.all(q >= lower - 1e-12) and np.all(q <= upper + 1e-12))
-            if inside and all(float(np.max(np.abs(q - s))) > 1e-9 for s in out):
-                out.append(q)
-        return out
+        if hint is not None:
+            near = np.asarray(hint, dtype=float)
+            q += 2 * math.pi * np.round((near - q) / (2 * math.pi))
+            # the nearest alias may lie past a stop; step back one turn towards the range
+            q = np.where(q > upper, q - 2 * math.pi, q)
+            q = np.where(q < lower, q + 2 * math.pi, q)
+        q = q[np.all((q >= lower - 1e-12) & (q <= upper + 1e-12), axis=1)]
+        # a branch repeated (at a singularity two coincide) is kept once, in the library's order
+        gaps = np.max(np.abs(q[:, None, :] - q[None, :, :]), axis=2)
+        repeated = np.any(np.tril(gaps <= 1e-9, k=-1), axis=1)
+        return list(q[~repeated])
 
 
 def ur_inverse(
