@@ -110,24 +110,32 @@ def check_task(spec: TaskSpec, lines: dict[PathKey, int] | None = None) -> None:
     if spec.manipulator is not None and spec.manipulator.hand_error is not None:
         _check_feasible(spec.manipulator.hand_error, ("manipulator", "hand_error"), fail)
 
-    ins = spec.insertion
-    if ins is not None:
-        by_any = {f.name: f for f in spec.frames} | {f.al_name: f for f in spec.frames}
+    by_any = {f.name: f for f in spec.frames} | {f.al_name: f for f in spec.frames}
+    for where, ins in _insertion_locations(spec):
         for field, want in (("pin", "pin"), ("hole", "hole"), ("start_hole", "hole")):
             ref = getattr(ins, field)
             if ref is None:
                 continue
             frame = by_any.get(ref) or by_any.get(ref.upper())
             if frame is None:
-                fail(("insertion", field), f"unknown frame {ref!r}")
+                fail((*where, field), f"unknown frame {ref!r}")
             elif frame.shape is None or frame.shape.type != want:
-                fail(("insertion", field), f"{ref!r} is not a {want}")
-        _check_fit(ins, by_any, fail)
+                fail((*where, field), f"{ref!r} is not a {want}")
+        _check_fit(ins, by_any, fail, where)
 
     check_contacts(spec, fail)  # contacts section: features exist, pairs and parents make sense
 
 
-def _check_fit(ins: InsertionSpec, frames: dict[str, FrameSpec], fail: Any) -> None:
+def _insertion_locations(spec: TaskSpec) -> list[tuple[PathKey, InsertionSpec]]:
+    """Each insertion with its place in the file: ``insertion`` or ``insertions.steps[i]``."""
+    if spec.insertions is not None:
+        return [(("insertions", "steps", i), s) for i, s in enumerate(spec.insertions.steps)]
+    return [] if spec.insertion is None else [(("insertion",), spec.insertion)]
+
+
+def _check_fit(
+    ins: InsertionSpec, frames: dict[str, FrameSpec], fail: Any, where: PathKey = ("insertion",)
+) -> None:
     """Fail if the insertion's pin is not thinner than its target (or start) hole."""
 
     def shape(ref: str | None) -> tuple[str, Any] | None:
@@ -143,7 +151,7 @@ def _check_fit(ins: InsertionSpec, frames: dict[str, FrameSpec], fail: Any) -> N
             continue
         problem = fit_problem(pin_[0], pin_[1].diameter, found[0], found[1].diameter)
         if problem is not None:
-            fail(("insertion", field), problem)
+            fail((*where, field), problem)
 
 
 def _check_feasible(unc: Uncertainty, loc: PathKey, fail: Any) -> None:

@@ -415,6 +415,37 @@ class InsertionSpec(_Model):
     (:mod:`synth.models.jamming`) and the replay's (:mod:`synth.replay.wedging`)."""
 
 
+class SequenceSpec(_Model):
+    """Several insertions in one task (seed IV ch. 5, L2870–2890): the steps and their order.
+
+    ``order: fixed`` runs the steps as listed; ``free`` lets the planner choose the order with
+    the least expected time. A plain list of steps in the task file means ``fixed``.
+    """
+
+    order: Literal["fixed", "free"] = "fixed"
+    steps: tuple[InsertionSpec, ...]
+
+    @model_validator(mode="before")
+    @classmethod
+    def _plain_list(cls, data: Any) -> Any:
+        return {"steps": data} if isinstance(data, list | tuple) else data
+
+    @field_validator("steps")
+    @classmethod
+    def _some(cls, v: tuple[InsertionSpec, ...]) -> tuple[InsertionSpec, ...]:
+        if not v:
+            raise ValueError("a sequence needs at least one step")
+        pins = [s.pin for s in v]
+        twice = sorted({p for p in pins if pins.count(p) > 1})
+        if twice:
+            raise ValueError(f"pin {twice[0]!r} is inserted twice; each step moves its own pin")
+        holes = [s.hole for s in v]
+        filled = sorted({h for h in holes if holes.count(h) > 1})
+        if filled:
+            raise ValueError(f"hole {filled[0]!r} receives two pins")
+        return v
+
+
 def _joint_rates(order: int) -> Any:
     """Per-joint rate limits with units, e.g. ``["2 rad/s", "50 cm/s"]`` → SI floats.
 
@@ -563,6 +594,7 @@ class TaskSpec(_Model):
     description: str = ""
     frames: tuple[FrameSpec, ...]
     insertion: InsertionSpec | None = None
+    insertions: SequenceSpec | None = None
     manipulator: ManipulatorSpec | None = None
     contacts: tuple[ContactSpec, ...] = ()
     proof: ProofSpec | None = None
@@ -573,6 +605,28 @@ class TaskSpec(_Model):
         if not v:
             raise ValueError("a task needs at least one frame")
         return v
+
+    @model_validator(mode="after")
+    def _one_insertion_form(self) -> TaskSpec:
+        if self.insertion is not None and self.insertions is not None:
+            raise ValueError("give 'insertion' (one step) or 'insertions' (a sequence), not both")
+        return self
+
+    @property
+    def steps(self) -> tuple[InsertionSpec, ...]:
+        """The insertions in their listed order: ``insertions.steps``, or ``(insertion,)``."""
+        if self.insertions is not None:
+            return self.insertions.steps
+        return () if self.insertion is None else (self.insertion,)
+
+    @property
+    def is_sequence(self) -> bool:
+        """Whether the task has more than one insertion."""
+        return len(self.steps) > 1
+
+    def step(self, insertion: InsertionSpec) -> TaskSpec:
+        """The single-insertion task of one step (the same frames, arm and proof)."""
+        return self.model_copy(update={"insertion": insertion, "insertions": None})
 
     def with_distribution(self, distribution: Distribution) -> TaskSpec:
         """The task with every error block (frames and hand) sampled from ``distribution``.

@@ -199,7 +199,15 @@ class GrossMotionCheck:
         frames = {graph.al_names[name]: name for name in graph.nodes}
         solids: dict[str, Displacement] = {}
         solid_frames: dict[str, str] = {}
-        for obstacle in workcell.obstacles:
+        # Every other pin is a solid where it stands (in its rack, or seated by an earlier step
+        # of a sequence), with its own uncertainty's margin like the parts.
+        others = [
+            model.pin_obstacle(frame, graph.world_from(frame))
+            for frame in model.pins
+            if frame != pin_frame
+        ]
+        obstacles = (*workcell.obstacles, *others)
+        for obstacle in obstacles:
             frame = frames.get(obstacle.name)
             if frame is not None:
                 solid_frames[obstacle.name] = frame
@@ -223,7 +231,7 @@ class GrossMotionCheck:
         rigid = frozenset([*(b.name for b in arm.bodies), carried.name])
         return GrossMotionCheck(
             arm,
-            workcell.obstacles,
+            obstacles,
             carried,
             pin_standing,
             empty=SweepOptions(

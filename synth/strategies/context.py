@@ -215,9 +215,16 @@ def pin_end_frame(pin_shape: PinShape, end: PinEnd) -> pin.SE3:
 
 
 def build_context(
-    spec: TaskSpec, options: PlanOptions | None = None, base_dir: Path | str | None = None
+    spec: TaskSpec,
+    options: PlanOptions | None = None,
+    base_dir: Path | str | None = None,
+    start: Configuration | None = None,
 ) -> PlanContext:
-    """Read the task into a :class:`PlanContext`; raise ``SpecError``/``UnreachableError``."""
+    """Read the task into a :class:`PlanContext`; raise ``SpecError``/``UnreachableError``.
+
+    ``start`` is where the arm begins (a later step of a sequence starts where the last one
+    ended); default: its configuration at the park frame (:func:`park_configuration`).
+    """
     _require(spec)
     graph = believed_graph(spec)  # objects located by contacts: derived pose and block
     spec = graph.spec
@@ -234,7 +241,11 @@ def build_context(
     park = pose_to_se3(manip.park.pose)
     counters = PlanCounters()
     counters.ik += 1
-    q_park = park_configuration(arm, park, nominal_environment(graph, arm), manip.park.al_name)
+    q_park = (
+        park_configuration(arm, park, nominal_environment(graph, arm), manip.park.al_name)
+        if start is None
+        else np.array(start, dtype=float)
+    )
     d_i = start_depth(graph, insertion.start_hole, insertion.pin)
     end: PinEnd = "tip" if insertion.direction == "parallel" else "head"
     pin_al = graph.al_names[insertion.pin]

@@ -17,6 +17,9 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+import numpy as np
+from numpy.typing import NDArray
+
 from synth.exceptions import NoStrategyError
 from synth.models.spec import TaskSpec
 from synth.strategies.approach import Candidate, plan_approach
@@ -48,6 +51,7 @@ def plan_task(
     options: PlanOptions | None = None,
     base_dir: Path | str | None = None,
     accept: Accept | None = None,
+    q_start: NDArray[np.float64] | None = None,
 ) -> PlanResult:
     """Plan a pin-in-hole task; raise :class:`~synth.exceptions.NoStrategyError` if none works.
 
@@ -60,9 +64,10 @@ def plan_task(
     is dropped and best-first selection runs again over the rest (refinements are kept, so a
     candidate is refined at most once). The planner stays a pure function: what ``accept``
     checks (the pipeline emits and proves the program) is not the planner's business.
+    ``q_start`` is the arm's first configuration (default: at the park frame).
     """
     start = time.perf_counter()
-    ctx = build_context(spec, options, base_dir)
+    ctx = build_context(spec, options, base_dir, q_start)
     hopeless = hole_tilt_problem(ctx)
     if hopeless is not None:
         raise NoStrategyError(spec.name, (hopeless,), root_cause([hopeless]))
