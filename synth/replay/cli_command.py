@@ -28,6 +28,7 @@ __all__ = [
     "ProgressBar",
     "add_replay_parser",
     "add_workers_argument",
+    "available_cores",
     "resolve_workers",
     "run_replay",
 ]
@@ -71,15 +72,35 @@ def add_workers_argument(parser: Any, what: str) -> None:
         "--workers",
         type=int,
         default=None,
-        help=f"processes running {what} (default: one per CPU core)",
+        help=f"processes running {what} (default and most: one per CPU core)",
     )
 
 
-def resolve_workers(value: int | None) -> int:
-    """``--workers`` as a count: one per CPU core when not given; below 1 is a usage error."""
-    workers = value if value is not None else (os.cpu_count() or 1)
+def available_cores() -> int:
+    """CPU cores this process may run on (its affinity mask where the OS has one)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):  # not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def resolve_workers(value: int | None, *, stream: TextIO | None = None) -> int:
+    """``--workers`` as a count: one per CPU core when not given, and never more than the cores.
+
+    Below 1 is a usage error. A larger count is capped at :func:`available_cores` with a
+    one-line note on ``stream`` (standard error by default): more processes than cores only
+    add start-up time and memory, and the trials' results do not depend on the count.
+    """
+    cores = available_cores()
+    workers = value if value is not None else cores
     if workers < 1:
         raise SynthError(f"--workers must be 1 or more, got {workers}")
+    if workers > cores:
+        print(
+            f"synth: --workers {workers} capped at the {cores} CPU cores available",
+            file=stream if stream is not None else sys.stderr,
+        )
+        workers = cores
     return workers
 
 
