@@ -142,13 +142,28 @@ def add_replay_parser(sub: Any) -> None:
 
 
 def _read_program(path: str) -> str:
+    """The program file's text; a byte that is not UTF-8 is reported at its line:column."""
     try:
-        with open(path, encoding="utf-8") as f:
-            return f.read()
+        with open(path, "rb") as f:
+            raw = f.read()
     except FileNotFoundError:
         raise SynthError(f"{path}: no such program file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SynthError(f"{path}: cannot read the program: {exc}") from None
+    except OSError as exc:
+        raise SynthError(f"{path}: cannot read the program: {exc.strerror or exc}") from None
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        from synth.exceptions import ALSyntaxError
+
+        before = raw[: exc.start].decode("utf-8", "replace")
+        line = before.count("\n") + 1
+        column = len(before) - (before.rfind("\n") + 1) + 1  # in characters, 1-based
+        raise ALSyntaxError(
+            line,
+            column,
+            f"byte 0x{raw[exc.start]:02x} is not UTF-8 text (AL programs are UTF-8)",
+            filename=path,
+        ) from None
 
 
 def run_replay(args: argparse.Namespace) -> int:

@@ -146,7 +146,13 @@ def machine_for(context: ReplayContext, world: TrueWorld, hand_errors: HandError
 
 def run_machine(context: ReplayContext, machine: ReplayMachine) -> tuple[RunReport, Interpreter]:
     """Run the program on ``machine``; the run's report and the interpreter (its beliefs)."""
-    interpreter = context.binding.interpreter(machine)
+    budget = context.options
+    interpreter = context.binding.interpreter(
+        machine,
+        max_statements=budget.max_statements,
+        max_time=budget.max_time,
+        max_wall_time=budget.max_wall_time,
+    )
     try:
         result = interpreter.run(context.program)
     except ViolationStop as stop:
