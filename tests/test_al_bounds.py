@@ -148,3 +148,12 @@ def test_a_byte_that_is_not_utf8_is_reported_at_line_and_column(tmp_path: Path) 
     assert done.returncode == 2
     assert f"{program}:2:7: byte 0xff is not UTF-8" in done.stderr
     assert "position" not in done.stderr  # the codec's byte offset
+
+
+def test_lines_ended_by_a_lone_cr_are_counted_as_lines() -> None:
+    with pytest.raises(ALSyntaxError) as e:
+        parse_program("SCALAR S;\rS ← 1;\rS ← ;\r", filename="cr.al")
+    assert (e.value.line, e.value.column) == (3, 5)  # was 1:22, an offset into the text
+    with pytest.raises(ALSyntaxError) as e:
+        parse_program("SCALAR S;\r\nS ← 1;\r\nS ← ;\r\n", filename="crlf.al")
+    assert (e.value.line, e.value.column) == (3, 5)

@@ -46,6 +46,7 @@ from synth.exceptions import ALSyntaxError
 
 __all__ = ["grammar_keywords", "parse_program"]
 
+_LONE_CR = re.compile(r"\r(?!\n)")
 _KEYWORD_LINE = re.compile(r"^([A-Z]+)\.2:\s*/([a-z]+)\\b/i\s*$", re.MULTILINE)
 
 _BINARY = {
@@ -326,6 +327,9 @@ def parse_program(text: str, *, filename: str = "<al>") -> ast.Program:
             for a float (309 digits) and for a program nested more than
             :data:`~synth.al.ast.MAX_NESTING` levels deep.
     """
+    # A lone CR ends a line for editors but not for lark's line counter, whose columns would
+    # then be offsets into the whole text; one character for one keeps every position.
+    text = _LONE_CR.sub("\n", text)
     try:
         program = cast(ast.Program, _lark().parse(text))
     except UnexpectedInput as error:
