@@ -1,6 +1,6 @@
 """Time `synth plan` per fixture: best-first against exhaustive selection (seed §4.6).
 
-Usage: python benchmarks/plan.py [--repeat N]
+Usage: python benchmarks/plan.py [--repeat N] [--tasks seed_4_8,seed_4_8_ur5,seed_4_8_panda]
 For every task fixture the planner accepts (and each with --try-harder), prints the median
 planning time of both modes, their ratio, whether they chose the same strategy, how many
 candidates each refined, and the IK, motion-time, bound and LP calls of each. ``×seed``: the
@@ -41,7 +41,9 @@ def timed(spec, repeat: int, **kwargs) -> tuple[float, PlanResult]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument("--tasks", default="", help="fixture names, comma-separated (default: all)")
     args = parser.parse_args()
+    chosen = {t for t in args.tasks.split(",") if t}
 
     baseline, _ = timed(load_task(ROOT / "fixtures/tasks/seed_4_8.yaml"), args.repeat)
     header = (
@@ -52,6 +54,8 @@ def main() -> None:
     print(header)
     print("-" * len(header))
     for path in sorted((ROOT / "fixtures/tasks").glob("*.yaml")):
+        if chosen and path.stem not in chosen:
+            continue
         spec = load_task(path)
         for harder in (False, True):
             label = path.stem + (" --try-harder" if harder else "")

@@ -18,8 +18,6 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
-import yaml
-
 import synth
 from server.exceptions import NotFound, ReplayUnavailable, UnsupportedMediaType
 from server.modelpaths import confine_model_files
@@ -27,6 +25,7 @@ from server.settings import Settings
 from server.workers import WorkerPool
 from synth.exceptions import SpecError
 from synth.models.spec import TaskSpec
+from synth.models.yamlread import YamlLimits
 
 if TYPE_CHECKING:  # the store is the server's; jobs in worker processes never load it
     from server.db import PlanStore, StoredPlan
@@ -34,6 +33,7 @@ if TYPE_CHECKING:  # the store is the server's; jobs in worker processes never l
 SpecKind = Literal["yaml", "json"]
 
 MAX_NESTING = 32  # deepest mapping/sequence nesting accepted in a spec (the schema needs ~6)
+YAML_LIMITS = YamlLimits(max_depth=MAX_NESTING, max_aliases=0)  # the CLI's, without aliases
 
 YAML_MEDIA_TYPES = frozenset(
     {"application/yaml", "application/x-yaml", "text/yaml", "text/x-yaml", "text/plain"}
@@ -60,29 +60,6 @@ def spec_kind(content_type: str | None) -> SpecKind:
         "or JSON (application/json)",
         accepted=list(ACCEPTED_MEDIA_TYPES),
     )
-
-
-def _check_yaml_shape(text: str) -> None:
-    """Refuse aliases (exponential expansion) and deep nesting before PyYAML builds a tree."""
-    depth = 0
-    try:
-        for event in yaml.parse(text, Loader=yaml.SafeLoader):
-            if isinstance(event, yaml.AliasEvent):
-                line = event.start_mark.line + 1 if event.start_mark else None
-                raise SpecError("", "YAML aliases (*name) are not accepted by the server", line)
-            if isinstance(event, yaml.CollectionStartEvent):
-                depth += 1
-                if depth > MAX_NESTING:
-                    line = event.start_mark.line + 1 if event.start_mark else None
-                    raise SpecError("", f"nested deeper than {MAX_NESTING} levels", line)
-            elif isinstance(event, yaml.CollectionEndEvent):
-                depth -= 1
-    except yaml.MarkedYAMLError as exc:
-        mark = exc.problem_mark or exc.context_mark
-        line = mark.line + 1 if mark is not None else None
-        raise SpecError("", f"YAML syntax error: {exc.problem or exc}", line) from None
-    except yaml.YAMLError as exc:
-        raise SpecError("", f"YAML error: {exc}") from None
 
 
 def _nesting(value: Any) -> int:
@@ -132,8 +109,7 @@ def parse_spec(body: bytes | str | dict[str, Any], kind: SpecKind = "yaml") -> T
         if not isinstance(data, dict):
             raise SpecError("", "a task is a JSON object with 'name' and 'frames'", 1)
         return parse_spec(data)
-    _check_yaml_shape(text)
-    return parse_task(text, source="<request>")
+    return parse_task(text, source="<request>", limits=YAML_LIMITS)
 
 
 def content_hash(body: bytes, kind: SpecKind, options: dict[str, Any]) -> str:

@@ -415,6 +415,29 @@ def walk(node: Node) -> Iterator[Node]:
         stack.extend(reversed(list(children(current))))
 
 
+MAX_NESTING = 100
+"""Deepest nesting of AST nodes below the program: statements inside blocks, IF, WHILE and FOR
+bodies, and expressions inside expressions, all counted alike. The parser refuses deeper
+programs with a syntax error and the interpreter with a runtime error, both naming the line:
+evaluation recurses (two or three Python frames a level), so without the bound ~1 000 nested
+NOTs, IFs, BEGINs or ABS calls ran into Python's recursion limit. The generated programs nest
+fewer than 10 levels."""
+
+
+def too_deep(node: Node, limit: int = MAX_NESTING) -> Node | None:
+    """The first node (depth first, in source order) more than ``limit`` levels below ``node``.
+
+    None when the tree is at most ``limit`` deep. Iterative, so any depth can be checked.
+    """
+    stack = [(node, 0)]
+    while stack:
+        current, depth = stack.pop()
+        if depth > limit:
+            return current
+        stack.extend((child, depth + 1) for child in reversed(list(children(current))))
+    return None
+
+
 def without_positions(node: N) -> N:
     """Copy ``node`` with every position zeroed, to compare shapes (round trips)."""
     changes: dict[str, Any] = {}

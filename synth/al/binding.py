@@ -29,7 +29,13 @@ import numpy as np
 import pinocchio as pin
 
 from synth.al import ast
-from synth.al.interpreter import HAND_NAMES, Interpreter
+from synth.al.interpreter import (
+    HAND_NAMES,
+    MAX_STATEMENTS,
+    MAX_TIME,
+    MAX_WALL_TIME,
+    Interpreter,
+)
 from synth.al.machine import Machine
 from synth.al.printer import format_program
 from synth.models.graph import AttributeGraph, pose_to_se3
@@ -84,10 +90,21 @@ class WorldBinding:
         for a in self.affixments:
             interpreter.affix(a.child, a.parent, a.parent_from_child, rigid=a.rigid)
 
-    def interpreter(self, machine: Machine, *, max_statements: int = 1_000_000) -> Interpreter:
-        """A fresh interpreter on ``machine`` with this binding applied."""
+    def interpreter(
+        self,
+        machine: Machine,
+        *,
+        max_statements: int = MAX_STATEMENTS,
+        max_time: float = MAX_TIME,
+        max_wall_time: float = MAX_WALL_TIME,
+    ) -> Interpreter:
+        """A fresh interpreter on ``machine`` with this binding applied (budgets: see it)."""
         interpreter = Interpreter(
-            machine, hand_names=self.hand_names, max_statements=max_statements
+            machine,
+            hand_names=self.hand_names,
+            max_statements=max_statements,
+            max_time=max_time,
+            max_wall_time=max_wall_time,
         )
         self.apply(interpreter)
         return interpreter

@@ -66,7 +66,16 @@ each time they are used, so assigning v in the body ends the loop (S:1532). Assi
 an expression: ``(n←n+1) ≤ 6``. *Decision (§7): AND and OR* take booleans and evaluate both
 operands, left to right, as ALGOL 60 does; there is no short circuit, so side effects such as
 ``ABS(X←...) < a AND ABS(Y←...) < b`` always happen. A relation chain evaluates every operand
-once. A statement budget (``max_statements``) turns a runaway loop into an error.
+once.
+
+**Budgets.** Three bounds turn a runaway program into a runtime error naming the statement
+about to run: ``max_statements`` statements (default 10⁶), ``max_time`` of the machine's
+simulated clock (default :data:`MAX_TIME`, 600 s: the seed's programs take seconds; a loop of
+MOVEs passes it in about ten seconds of computing where the statement budget took 1.7 h) and
+``max_wall_time`` of real time per run (default :data:`MAX_WALL_TIME`, 20 s, for loops of
+motions that take no simulated time). The wall clock makes a run's outcome depend on the
+computer only for a program that is already runaway. A program nested more than
+:data:`~synth.al.ast.MAX_NESTING` levels deep is refused before it runs (evaluation recurses).
 
 **Processes.** ``COBEGIN s1; s2; ... COEND`` interleaves its branches cooperatively, one
 statement at a time per process. A branch runs until it finishes or blocks in ``WAIT``, then
@@ -86,6 +95,8 @@ program raises :class:`~synth.exceptions.ALRuntimeError` with the AL line and co
 from __future__ import annotations
 
 import itertools
+import math
+import time
 from collections.abc import Callable, Generator, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any, cast
@@ -137,12 +148,23 @@ from synth.exceptions import ALRuntimeError
 
 __all__ = [
     "HAND_NAMES",
+    "MAX_STATEMENTS",
+    "MAX_TIME",
+    "MAX_WALL_TIME",
     "ALAbort",
     "Affixment",
     "Interpreter",
     "RunResult",
     "run_program",
 ]
+
+MAX_STATEMENTS = 1_000_000
+"""Statements one run may execute."""
+MAX_TIME = 600.0
+"""[s] simulated time one run may take."""
+MAX_WALL_TIME = 20.0
+"""[s] real time one run may take."""
+
 
 HAND_NAMES: tuple[str, ...] = ("BMANIP", "BLUE", "BARM", "BHAND", "BFINGERS")
 """The blue arm's names (al-language.md §6): all denote its one hand frame and hand device."""
@@ -266,7 +288,8 @@ class Interpreter:
     """Executes AL programs on ``machine``; one instance holds one program's world model.
 
     ``hand_names`` are the names of the arm's hand (all one frame and one device).
-    ``max_statements`` bounds the statements one :meth:`run` may execute.
+    ``max_statements`` bounds the statements one :meth:`run` may execute, ``max_time`` [s] the
+    simulated time it may take and ``max_wall_time`` [s] the real time (module docstring).
     """
 
     def __init__(
@@ -274,10 +297,16 @@ class Interpreter:
         machine: Machine,
         *,
         hand_names: Sequence[str] = HAND_NAMES,
-        max_statements: int = 1_000_000,
+        max_statements: int = MAX_STATEMENTS,
+        max_time: float = MAX_TIME,
+        max_wall_time: float = MAX_WALL_TIME,
     ) -> None:
         self.machine = machine
         self.max_statements = max_statements
+        self.max_time = max_time
+        self.max_wall_time = max_wall_time
+        self._time_limit = math.inf  # [s] simulated clock at which the run is over budget
+        self._wall_limit = math.inf  # [s] time.monotonic() at which it is
         self.hand_names = tuple(n.upper() for n in hand_names)
         self._global = _Scope(None, "<global>")
         self._hand = _Variable(self.hand_names[0], "FRAME", hand=True)
@@ -347,8 +376,13 @@ class Interpreter:
     def run(self, program: ast.Program) -> RunResult:
         """Execute ``program``; returns its outcome, raises ALRuntimeError for a faulty one."""
         self._filename = program.filename
+        deep = ast.too_deep(program)
+        if deep is not None:
+            raise self._error(deep, f"nested more than {ast.MAX_NESTING} levels deep")
         start = self._statements
         self._budget = start + self.max_statements
+        self._time_limit = self.machine.time() + self.max_time
+        self._wall_limit = time.monotonic() + self.max_wall_time
         context = _Context(self._global)
         steps = self._sequence(program.body, context, declare_in=self._global)
         try:
@@ -397,6 +431,17 @@ class Interpreter:
         if self._statements > self._budget:
             raise self._error(
                 statement, f"more than {self.max_statements} statements executed (an endless loop?)"
+            )
+        if self.machine.time() > self._time_limit:
+            raise self._error(
+                statement,
+                f"more than {self.max_time:g} s of simulated time (an endless loop of motions?)",
+            )
+        if time.monotonic() > self._wall_limit:
+            raise self._error(
+                statement,
+                f"more than {self.max_wall_time:g} s of computing time for one run "
+                "(an endless loop?)",
             )
         method = _STATEMENTS.get(type(statement))
         if method is None:

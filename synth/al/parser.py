@@ -25,6 +25,7 @@ followed by a unit without ``*``, a keyword used as a name, unterminated comment
 from __future__ import annotations
 
 import functools
+import math
 import re
 from collections.abc import Iterable, Sequence
 from dataclasses import replace
@@ -45,6 +46,7 @@ from synth.exceptions import ALSyntaxError
 
 __all__ = ["grammar_keywords", "parse_program"]
 
+_LONE_CR = re.compile(r"\r(?!\n)")
 _KEYWORD_LINE = re.compile(r"^([A-Z]+)\.2:\s*/([a-z]+)\\b/i\s*$", re.MULTILINE)
 
 _BINARY = {
@@ -87,8 +89,11 @@ def _retype_keyword(token: Token) -> Token:
 # Tree → AST
 
 
-class _AffixOptionError(Exception):
-    """An AFFIX option repeated or contradicted; converted to ALSyntaxError by the caller."""
+class _TokenError(Exception):
+    """A token the grammar accepts but AL does not; the caller makes it an ALSyntaxError.
+
+    An AFFIX option repeated or contradicted, a number literal too large for a float.
+    """
 
     def __init__(self, token: Token, problem: str) -> None:
         super().__init__(problem)
@@ -221,14 +226,12 @@ class _ToAST(Transformer[Token, Any]):
         for head, value in c[4:]:
             if head.type == "AT":
                 if at is not None:
-                    raise _AffixOptionError(head, "AFFIX has more than one AT")
+                    raise _TokenError(head, "AFFIX has more than one AT")
                 at = value
                 last = value
             else:
                 if rigid is not None:
-                    raise _AffixOptionError(
-                        head, "AFFIX has more than one RIGIDLY / NONRIGIDLY option"
-                    )
+                    raise _TokenError(head, "AFFIX has more than one RIGIDLY / NONRIGIDLY option")
                 rigid = value
                 last = head
         return ast.Affix(c[1], c[3], at, bool(rigid), **_span(c[0], last))
@@ -267,7 +270,13 @@ class _ToAST(Transformer[Token, Any]):
         return ast.Compare(operands, ops, **_node_span(c))
 
     def number(self, c: list[Token]) -> ast.Number:
-        return ast.Number(float(c[0].value), c[0].value, **_node_span(c))
+        value = float(c[0].value)  # digits only (the grammar's NUMBER): never a ValueError
+        if math.isinf(value):
+            digits = len(c[0].value.split(".")[0])
+            raise _TokenError(
+                c[0], f"the number literal ({digits} digits) is too large: at most ~1.8e308"
+            )
+        return ast.Number(value, c[0].value, **_node_span(c))
 
     def string(self, c: list[Token]) -> ast.String:
         return ast.String(_unquote(c[0]), **_node_span(c))
@@ -314,15 +323,20 @@ def parse_program(text: str, *, filename: str = "<al>") -> ast.Program:
 
     Raises:
         ALSyntaxError: the text is not AL; the error names file, line, column, a caret
-            context and what the grammar expected there.
+            context and what the grammar expected there. Also for a number literal too large
+            for a float (309 digits) and for a program nested more than
+            :data:`~synth.al.ast.MAX_NESTING` levels deep.
     """
+    # A lone CR ends a line for editors but not for lark's line counter, whose columns would
+    # then be offsets into the whole text; one character for one keeps every position.
+    text = _LONE_CR.sub("\n", text)
     try:
         program = cast(ast.Program, _lark().parse(text))
     except UnexpectedInput as error:
         problem = _syntax_error(error, text, filename)
         problem.context = problem.context.replace("\r", "")
         raise problem from None
-    except _AffixOptionError as error:
+    except _TokenError as error:
         line, column = error.token.line or 1, error.token.column or 1
         raise ALSyntaxError(
             line,
@@ -331,6 +345,15 @@ def parse_program(text: str, *, filename: str = "<al>") -> ast.Program:
             context=_caret(text, line, column),
             filename=filename,
         ) from None
+    deep = ast.too_deep(program)
+    if deep is not None:
+        raise ALSyntaxError(
+            deep.line,
+            deep.column,
+            f"nested more than {ast.MAX_NESTING} levels deep (statements and expressions)",
+            context=_caret(text, deep.line, deep.column),
+            filename=filename,
+        )
     return replace(program, filename=filename) if filename != program.filename else program
 
 

@@ -8,12 +8,10 @@ references, infeasible constraint sets).
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 from pydantic import ValidationError
 from scipy.optimize import linprog
 
@@ -21,28 +19,41 @@ from synth.exceptions import SpecError
 from synth.models.features import check_contacts
 from synth.models.jamming import fit_problem
 from synth.models.spec import PARAMS, WORLD, FrameSpec, InsertionSpec, TaskSpec, Uncertainty
+from synth.models.yamlread import DEFAULT_LIMITS, PathKey, YamlLimits, read_yaml
 
-PathKey = tuple[str | int, ...]
 
+def load_task(path: str | Path, *, limits: YamlLimits = DEFAULT_LIMITS) -> TaskSpec:
+    """Read and validate a task file; raise :class:`SpecError` on any problem.
 
-def load_task(path: str | Path) -> TaskSpec:
-    """Read and validate a task file; raise :class:`SpecError` on any problem."""
+    At most ``limits.max_bytes + 1`` bytes are read, so a huge file (or ``/dev/zero``) is refused
+    without being read whole.
+    """
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        with p.open("rb") as f:
+            raw = f.read(limits.max_bytes + 1)
+        text = raw.decode("utf-8")
     except FileNotFoundError:
         raise SpecError(str(p), "no such task file") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise SpecError(str(p), f"cannot read task file: {exc}") from None
-    return parse_task(text, source=str(p))
+    if len(raw) > limits.max_bytes:
+        raise SpecError(str(p), f"the task file is over the limit of {limits.max_bytes} bytes")
+    return parse_task(text, source=str(p), limits=limits)
 
 
-def parse_task(text: str, *, source: str = "<task>") -> TaskSpec:
-    """Validate task YAML text (or JSON, which is YAML) into a :class:`TaskSpec`."""
-    data, lines = _load_yaml(text, source)
-    if not isinstance(data, dict):
+def parse_task(
+    text: str, *, source: str = "<task>", limits: YamlLimits = DEFAULT_LIMITS
+) -> TaskSpec:
+    """Validate task YAML text (or JSON, which is YAML) into a :class:`TaskSpec`.
+
+    The text is parsed once, under ``limits`` (size, nesting, list length, aliases and their
+    expansion: :mod:`synth.models.yamlread`); the CLI and the service both come through here.
+    """
+    doc = read_yaml(text, source=source, limits=limits)
+    if not isinstance(doc.data, dict):
         raise SpecError("", "a task is a YAML mapping with 'name' and 'frames'", 1)
-    return validate_task(data, lines)
+    return validate_task(doc.data, doc.lines)
 
 
 def validate_task(data: dict[str, Any], lines: dict[PathKey, int] | None = None) -> TaskSpec:
@@ -221,37 +232,6 @@ def _line_of(loc: PathKey, lines: dict[PathKey, int]) -> int | None:
         if loc[:n] in lines:
             return lines[loc[:n]]
     return None
-
-
-def _load_yaml(text: str, source: str) -> tuple[Any, dict[PathKey, int]]:
-    try:
-        node = yaml.compose(text, Loader=yaml.SafeLoader)
-        data = yaml.safe_load(text)
-    except yaml.MarkedYAMLError as exc:
-        mark = exc.problem_mark or exc.context_mark
-        line = mark.line + 1 if mark is not None else None
-        raise SpecError(source, f"YAML syntax error: {exc.problem or exc}", line) from None
-    except yaml.YAMLError as exc:
-        raise SpecError(source, f"YAML error: {exc}") from None
-    lines: dict[PathKey, int] = {}
-    if node is not None:
-        for path, n in _walk(node, ()):
-            lines[path] = n.start_mark.line + 1
-    return data, lines
-
-
-def _walk(node: yaml.Node, path: PathKey) -> Iterator[tuple[PathKey, yaml.Node]]:
-    yield path, node
-    if isinstance(node, yaml.MappingNode):
-        for key, value in node.value:
-            k = key.value if isinstance(key, yaml.ScalarNode) else str(key)
-            yield (*path, k), key
-            for sub_path, sub in _walk(value, (*path, k)):
-                if sub_path != (*path, k):
-                    yield sub_path, sub
-    elif isinstance(node, yaml.SequenceNode):
-        for i, item in enumerate(node.value):
-            yield from _walk(item, (*path, i))
 
 
 __all__ = ["PARAMS", "check_task", "format_path", "load_task", "parse_task", "validate_task"]

@@ -28,6 +28,7 @@ __all__ = [
     "ProgressBar",
     "add_replay_parser",
     "add_workers_argument",
+    "available_cores",
     "resolve_workers",
     "run_replay",
 ]
@@ -71,15 +72,35 @@ def add_workers_argument(parser: Any, what: str) -> None:
         "--workers",
         type=int,
         default=None,
-        help=f"processes running {what} (default: one per CPU core)",
+        help=f"processes running {what} (default and most: one per CPU core)",
     )
 
 
-def resolve_workers(value: int | None) -> int:
-    """``--workers`` as a count: one per CPU core when not given; below 1 is a usage error."""
-    workers = value if value is not None else (os.cpu_count() or 1)
+def available_cores() -> int:
+    """CPU cores this process may run on (its affinity mask where the OS has one)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):  # not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def resolve_workers(value: int | None, *, stream: TextIO | None = None) -> int:
+    """``--workers`` as a count: one per CPU core when not given, and never more than the cores.
+
+    Below 1 is a usage error. A larger count is capped at :func:`available_cores` with a
+    one-line note on ``stream`` (standard error by default): more processes than cores only
+    add start-up time and memory, and the trials' results do not depend on the count.
+    """
+    cores = available_cores()
+    workers = value if value is not None else cores
     if workers < 1:
         raise SynthError(f"--workers must be 1 or more, got {workers}")
+    if workers > cores:
+        print(
+            f"synth: --workers {workers} capped at the {cores} CPU cores available",
+            file=stream if stream is not None else sys.stderr,
+        )
+        workers = cores
     return workers
 
 
@@ -121,13 +142,28 @@ def add_replay_parser(sub: Any) -> None:
 
 
 def _read_program(path: str) -> str:
+    """The program file's text; a byte that is not UTF-8 is reported at its line:column."""
     try:
-        with open(path, encoding="utf-8") as f:
-            return f.read()
+        with open(path, "rb") as f:
+            raw = f.read()
     except FileNotFoundError:
         raise SynthError(f"{path}: no such program file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SynthError(f"{path}: cannot read the program: {exc}") from None
+    except OSError as exc:
+        raise SynthError(f"{path}: cannot read the program: {exc.strerror or exc}") from None
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        from synth.exceptions import ALSyntaxError
+
+        before = raw[: exc.start].decode("utf-8", "replace")
+        line = before.count("\n") + 1
+        column = len(before) - (before.rfind("\n") + 1) + 1  # in characters, 1-based
+        raise ALSyntaxError(
+            line,
+            column,
+            f"byte 0x{raw[exc.start]:02x} is not UTF-8 text (AL programs are UTF-8)",
+            filename=path,
+        ) from None
 
 
 def run_replay(args: argparse.Namespace) -> int:

@@ -77,6 +77,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
+from synth.al.interpreter import MAX_STATEMENTS, MAX_TIME, MAX_WALL_TIME
 from synth.al.machine import (
     DurationMonitor,
     EventMonitor,
@@ -157,6 +158,12 @@ class ReplayOptions:
     """[m] a pin within this of its seated depth is seated."""
     clear_distance: float = 1e-3
     """[m] the hand is clear of the pin when palm and fingers are at least this far from it."""
+    max_statements: int = MAX_STATEMENTS
+    """Statements one run may execute (the interpreter's budgets: :mod:`synth.al.interpreter`)."""
+    max_time: float = MAX_TIME
+    """[s] simulated time one run may take; past it the run is an AL runtime error."""
+    max_wall_time: float = MAX_WALL_TIME
+    """[s] real time one run may take (a loop of motions that take no simulated time)."""
 
 
 class ViolationStop(Exception):

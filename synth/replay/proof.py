@@ -40,6 +40,7 @@ from synth.models.spec import Distribution, TaskSpec
 from synth.replay.machine import ReplayOptions
 from synth.replay.report import MonteCarloReport, RunReport, wilson_interval
 from synth.replay.run import build_context, run_nominal, summarise, trial_errors
+from synth.replay.tally import TrialTally
 from synth.replay.trials import TrialPool, iter_trials, job_for
 
 __all__ = [
@@ -325,20 +326,18 @@ def prove(
     job = job_for(program_text, context, base_dir=base_dir, options=replay_options)
     own_pool = pool is None
     active = pool if pool is not None else TrialPool(opts.workers)
-    runs: list[RunReport] = []
+    tally = TrialTally(kept_runs=0)  # counts and times only: bounded whatever the budget
     first: tuple[int, RunReport] | None = None
     decision: Decision | None = None
-    successes = 0
     try:
         trials = iter_trials(job, context, opts.seed, opts.trials, active)
         for run in trials:
-            runs.append(run)
+            tally.add(run)
             if first is None and not run.success:
-                first = (len(runs) - 1, run)
+                first = (tally.count - 1, run)
             if progress is not None:
-                progress(len(runs), opts.trials)
-            successes += run.success
-            decision = _decide(opts, successes, len(runs))
+                progress(tally.count, opts.trials)
+            decision = _decide(opts, tally.successes, tally.count)
             if decision is not None:
                 trials.close()
                 break
@@ -355,7 +354,7 @@ def prove(
     return Proof(
         options=opts,
         nominal=nominal,
-        monte_carlo=summarise(runs, opts.seed),  # the counts and times a replay would report
+        monte_carlo=tally.report(opts.seed),  # the counts and times a replay would report
         # At the budget the failures are within the allowance (else "curtailed" had fired).
         passed=decision in ("budget", "wilson-lower"),
         decided_by=decision,

@@ -151,8 +151,9 @@ class MonteCarloReport:
 class ReplayReport:
     """A program replayed on a task: the nominal run and the Monte Carlo trials.
 
-    ``ok`` holds when the nominal run (true world = beliefs) succeeds; ``trials`` keeps every
-    trial's run, in trial order (not part of the JSON).
+    ``ok`` holds when the nominal run (true world = beliefs) succeeds; ``trials`` keeps the
+    runs of the first :data:`~synth.replay.tally.KEPT_RUNS` trials, in trial order (not part
+    of the JSON; later trials are counted in ``monte_carlo`` only).
     """
 
     program: str

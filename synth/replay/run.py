@@ -27,8 +27,7 @@ hand clear; a task without an insertion succeeds by running to its end) and ``fa
 
 from __future__ import annotations
 
-from collections import Counter
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -49,7 +48,8 @@ from synth.models.park import nominal_environment, park_configuration
 from synth.models.spec import Distribution, TaskSpec
 from synth.models.workcell import WorkcellModel
 from synth.replay.machine import ReplayMachine, ReplayOptions, ViolationStop
-from synth.replay.report import OUTCOMES, MonteCarloReport, Outcome, ReplayReport, RunReport
+from synth.replay.report import MonteCarloReport, Outcome, ReplayReport, RunReport
+from synth.replay.tally import TrialTally
 from synth.replay.trials import TrialPool, iter_trials, job_for
 from synth.replay.truth import HandErrors, TrueWorld, nominal_world, sample_world
 
@@ -147,7 +147,13 @@ def machine_for(context: ReplayContext, world: TrueWorld, hand_errors: HandError
 
 def run_machine(context: ReplayContext, machine: ReplayMachine) -> tuple[RunReport, Interpreter]:
     """Run the program on ``machine``; the run's report and the interpreter (its beliefs)."""
-    interpreter = context.binding.interpreter(machine)
+    budget = context.options
+    interpreter = context.binding.interpreter(
+        machine,
+        max_statements=budget.max_statements,
+        max_time=budget.max_time,
+        max_wall_time=budget.max_wall_time,
+    )
     try:
         result = interpreter.run(context.program)
     except ViolationStop as stop:
@@ -209,16 +215,16 @@ def run_trial(context: ReplayContext, seed: int, index: int) -> RunReport:
     return run_world(context, world, hand)
 
 
-def summarise(runs: Sequence[RunReport], seed: int) -> MonteCarloReport:
-    """Outcome counts (in :data:`OUTCOMES` order) and time mean / 95th percentile [s]."""
-    counts = Counter(r.outcome for r in runs)
-    outcomes: dict[str, int] = {o: counts[o] for o in OUTCOMES if counts[o]}
-    if not runs:
-        return MonteCarloReport(0, seed, outcomes)
-    times = np.array([r.time for r in runs])
-    return MonteCarloReport(
-        len(runs), seed, outcomes, float(np.mean(times)), float(np.percentile(times, 95))
-    )
+def summarise(runs: Iterable[RunReport], seed: int) -> MonteCarloReport:
+    """Outcome counts (in ``OUTCOMES`` order) and time mean / 95th percentile [s].
+
+    The runs are tallied as they come (:class:`~synth.replay.tally.TrialTally`), so ``runs``
+    may be a stream.
+    """
+    tally = TrialTally(kept_runs=0)
+    for run in runs:
+        tally.add(run)
+    return tally.report(seed)
 
 
 def trial_errors(context: ReplayContext, seed: int, index: int) -> dict[str, dict[str, float]]:
@@ -266,13 +272,13 @@ def replay(
     )
     nominal = run_nominal(context)
     job = job_for(program_text, context, filename=filename, base_dir=base_dir, options=options)
-    runs: list[RunReport] = []
+    tally = TrialTally()  # bounded memory, whatever ``trials`` is
     with TrialPool(min(workers, max(trials, 1))) as pool:
         for run in iter_trials(job, context, seed, trials, pool):
-            runs.append(run)
+            tally.add(run)
             if progress is not None:
-                progress(len(runs), trials)
-    return ReplayReport(filename, context.spec.name, nominal, summarise(runs, seed), tuple(runs))
+                progress(tally.count, trials)
+    return ReplayReport(filename, context.spec.name, nominal, tally.report(seed), tuple(tally.runs))
 
 
 replay_program = replay

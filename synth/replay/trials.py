@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import hashlib
 import multiprocessing
-import os
 from collections import OrderedDict, deque
 from collections.abc import Generator
 from concurrent.futures import Future, ProcessPoolExecutor
@@ -25,13 +24,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from synth.models.spec import TaskSpec
+from synth.replay.cli_command import available_cores
 from synth.replay.machine import ReplayOptions
 from synth.replay.report import RunReport
 
 if TYPE_CHECKING:  # run imports this module
     from synth.replay.run import ReplayContext
 
-__all__ = ["TrialJob", "TrialPool", "iter_trials", "job_for"]
+__all__ = ["TrialJob", "TrialPool", "iter_trials", "job_for", "max_in_flight"]
 
 _CHUNK = 4
 """Trials per task sent to a worker: small, so an early stop wastes little."""
@@ -109,11 +109,14 @@ def _import_replay() -> None:
 class TrialPool:
     """A pool of ``workers`` processes for Monte Carlo trials, started on first use.
 
-    Use it as a context manager, or call :meth:`close`. ``workers=None`` takes one per CPU.
+    Use it as a context manager, or call :meth:`close`. ``workers=None`` takes one per CPU
+    core, and more than the cores are capped at the cores
+    (:func:`~synth.replay.cli_command.available_cores`; the CLI says so when it caps).
     """
 
     def __init__(self, workers: int | None = None) -> None:
-        self.workers = max(1, workers if workers is not None else (os.cpu_count() or 1))
+        cores = available_cores()
+        self.workers = max(1, min(workers if workers is not None else cores, cores))
         self._executor: ProcessPoolExecutor | None = None
 
     def executor(self) -> ProcessPoolExecutor:
@@ -147,6 +150,14 @@ class TrialPool:
         self.close()
 
 
+def max_in_flight(workers: int) -> int:
+    """Chunks submitted and not yet consumed, at most: ``_AHEAD`` per worker.
+
+    So the futures and pending results of :func:`iter_trials` are O(workers), not O(trials).
+    """
+    return _AHEAD * workers
+
+
 def iter_trials(
     job: TrialJob,
     context: ReplayContext,
@@ -155,6 +166,10 @@ def iter_trials(
     pool: TrialPool | None = None,
 ) -> Generator[RunReport, None, None]:
     """Trials 0 … count−1 of ``job`` in trial order (see the module docstring).
+
+    The trials are streamed: at most :func:`max_in_flight` chunks of ``_CHUNK`` trials are
+    submitted ahead of the consumer, whatever ``count`` is (10⁸ trials start at once and hold
+    no more memory than 10).
 
     ``context`` is the caller's own :class:`~synth.replay.run.ReplayContext` of ``job``: the
     trials run in it when ``pool`` is None or has one worker.
@@ -166,13 +181,17 @@ def iter_trials(
             yield run_trial(context, seed, i)
         return
     executor = pool.executor()
-    chunks = deque((a, min(a + _CHUNK, count)) for a in range(0, count, _CHUNK))
+    starts = iter(range(0, count, _CHUNK))  # lazy: nothing is made per trial up front
     in_flight: deque[Future[list[RunReport]]] = deque()
     try:
-        while chunks or in_flight:
-            while chunks and len(in_flight) < _AHEAD * pool.workers:
-                a, b = chunks.popleft()
-                in_flight.append(executor.submit(_run_chunk, job, seed, a, b))
+        while True:
+            while len(in_flight) < max_in_flight(pool.workers):
+                a = next(starts, None)
+                if a is None:
+                    break
+                in_flight.append(executor.submit(_run_chunk, job, seed, a, min(a + _CHUNK, count)))
+            if not in_flight:
+                return
             yield from in_flight.popleft().result()
     finally:
         for future in in_flight:

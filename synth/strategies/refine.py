@@ -40,13 +40,7 @@ from synth.strategies.fine import fine_motion_obstruction
 from synth.strategies.footprint import estimate_footprint, footprint_tables
 from synth.strategies.records import PinInHoleStrategy, Rejection
 from synth.strategies.relations import approach_relation, hole_only_relation
-from synth.strategies.search import (
-    MAX_POINTS,
-    pattern_size,
-    plan_search,
-    points_within_box,
-    seed_rings,
-)
+from synth.strategies.search import plan_search, points_within_box, search_size_problem
 from synth.strategies.tapping import plan_tap
 
 DEGREE = math.pi / 180
@@ -168,14 +162,9 @@ def refine(ctx: PlanContext, cand: Candidate) -> Refined | Rejection:
     search = None
     if fp.dr > ins.dr_ok:
         step = opts.search_step_fraction * ins.dr_ok
-        size = pattern_size(step, seed_rings(fp.dx, fp.dy, step) + 1)
-        if size > MAX_POINTS:
-            return Rejection(
-                cand.name,
-                f"error footprint ±{_cm(fp.dx)} × ±{_cm(fp.dy)} against Δr_ok = "
-                f"{_cm(ins.dr_ok)} needs a search of about {size} points (more than "
-                f"{MAX_POINTS})",
-            )
+        too_large = search_size_problem(fp.dx, fp.dy, ins.dr_ok, step)  # before enumerating
+        if too_large is not None:
+            return Rejection(cand.name, too_large)
         search = plan_search(fp.dx, fp.dy, fp.zeta, ins.dr_ok, cand.try_time, opts)
         decisions.append(
             f"search: error footprint ±{_cm(fp.dx)} × ±{_cm(fp.dy)} (ζ = {_deg(fp.zeta)}) "

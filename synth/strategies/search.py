@@ -69,8 +69,36 @@ def coverage(points: NDArray[np.float64], dx: float, dy: float, margin: float = 
 
 
 def pattern_size(step: float, rings: int) -> int:
-    """Number of points of ``rings`` rings: ``Σ_k ⌈2πk⌉ ≤ π·rings·(rings + 1) + rings``."""
+    """Number of points of ``rings`` rings: ``Σ_k ⌈2πk⌉ ≤ π·rings·(rings + 1) + rings``.
+
+    O(rings): check :func:`search_size_problem` first when ``rings`` comes from the task.
+    """
     return sum(math.ceil(2 * math.pi * k - 1e-9) for k in range(1, rings + 1))
+
+
+def search_size_problem(dx: float, dy: float, dr_ok: float, step: float) -> str | None:
+    """Why no search pattern should be planned for ±dx × ±dy [m] at ``step`` [m], or None.
+
+    The pattern the planner would start from has ``R = seed_rings + 1`` rings, and
+    ``Σ_{k≤R} ⌈2πk⌉ ≥ π·R·(R + 1)`` points; when that bound already exceeds
+    :data:`MAX_POINTS` the pattern is refused in O(1), from floats, so a Δr_ok of 1e-9 cm
+    (10⁹ rings) is never enumerated or even summed. Below the bound (R ≤ 80) the size is
+    counted exactly. A step that is not positive and finite (Δr_ok = 0) is refused too. The
+    wording ("error footprint …, search of about N points") is the ``footprint`` cause of
+    :mod:`synth.strategies.causes`.
+    """
+    where = f"error footprint ±{100 * dx:.3g} cm × ±{100 * dy:.3g} cm against Δr_ok = "
+    where += f"{100 * dr_ok:.3g} cm"
+    if not (math.isfinite(step) and step > 0.0):
+        return f"{where} needs a search of about infinitely many points (no spacing)"
+    rings_f = max(dx, dy) / step + 1.0  # [1] seed_rings + 1, as a float: it may be huge
+    lower = math.pi * rings_f * (rings_f + 1.0)
+    if lower > MAX_POINTS:
+        return f"{where} needs a search of about {lower:.3g} points (more than {MAX_POINTS})"
+    size = pattern_size(step, seed_rings(dx, dy, step) + 1)
+    if size > MAX_POINTS:
+        return f"{where} needs a search of about {size} points (more than {MAX_POINTS})"
+    return None
 
 
 def seed_rings(dx: float, dy: float, step: float) -> int:
@@ -110,7 +138,12 @@ def expected_points(points: NDArray[np.float64], dx: float, dy: float) -> int:
 
 def points_within_box(step: float, half_x: float, half_y: float) -> int:
     """Pattern points with ``|x| ≤ half_x``, ``|y| ≤ half_y`` [m] (rings out to the corner)."""
-    rings = math.floor(math.hypot(half_x, half_y) / step + 1e-12)
+    if not (math.isfinite(step) and step > 0.0):
+        return 0  # no pattern at all: refused later (search_size_problem); 0 stays admissible
+    rings_f = math.hypot(half_x, half_y) / step
+    if math.pi * rings_f * (rings_f - 1.0) > MAX_POINTS:  # ≤ pattern_size(floor(rings_f))
+        return 0  # a pattern this large is rejected anyway; 0 keeps the bound admissible
+    rings = math.floor(rings_f + 1e-12)
     if pattern_size(step, rings) > MAX_POINTS:
         return 0  # a pattern this large is rejected anyway; 0 keeps the bound admissible
     return expected_points(pattern_points(step, rings), 2 * half_x, 2 * half_y)

@@ -1,0 +1,146 @@
+"""The one task loader (CLI and service): YAML bombs, depth and size limits (issue 19)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import tracemalloc
+from pathlib import Path
+
+import pytest
+import yaml
+
+from server.service import YAML_LIMITS, parse_spec
+from synth.exceptions import SpecError
+from synth.models.loader import load_task, parse_task
+from synth.models.yamlread import DEFAULT_LIMITS, WITH_LIBYAML, YamlLimits, read_yaml
+
+ROOT = Path(__file__).resolve().parent.parent
+SEED = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
+TASK_FILES = sorted((ROOT / "fixtures" / "tasks").rglob("*.yaml")) + sorted(
+    (ROOT / "tests" / "data").glob("*.yaml")
+)
+
+
+def billion_laughs(levels: int = 9) -> str:
+    """The classic: each level's list repeats the previous level's anchor nine times."""
+    text = "a: &a [lol, lol, lol, lol, lol, lol, lol, lol, lol]\n"
+    for i in range(1, levels):
+        name, prev = chr(ord("a") + i), chr(ord("a") + i - 1)
+        text += f"{name}: &{name} [{', '.join([f'*{prev}'] * 9)}]\n"
+    return text
+
+
+DEEP_FLOW = "name: t\nframes: " + "[" * 1000 + "]" * 1000 + "\n"
+DEEP_BLOCK = "".join("  " * i + "k:\n" for i in range(1000)) + "  " * 1000 + "x\n"
+HUGE_LIST = "name: t\nframes:\n" + "- {name: f}\n" * 50_000
+
+BOMBS = {
+    "billion laughs": (billion_laughs(), "expands to more than"),
+    "recursive alias": ("name: t\nframes: &f [*f]\n", "recursive alias"),
+    "recursive mapping alias": ("name: t\nm: &m {self: *m}\n", "recursive alias"),
+    "deep flow nesting": (DEEP_FLOW, "nested deeper than 32 levels"),
+    "deep block nesting": (DEEP_BLOCK, "nested deeper than 32 levels"),
+    "huge list": (HUGE_LIST, "list longer than 10000 items"),
+}
+
+
+def test_the_parser_is_libyaml_when_pyyaml_has_it() -> None:
+    assert hasattr(yaml, "CSafeLoader") == WITH_LIBYAML
+
+
+@pytest.mark.parametrize("path", TASK_FILES, ids=lambda p: p.name)
+def test_values_are_those_of_safe_load(path: Path) -> None:
+    text = path.read_text(encoding="utf-8")
+    assert read_yaml(text).data == yaml.safe_load(text)
+
+
+def test_lines_name_where_each_field_starts() -> None:
+    doc = read_yaml("name: t\nframes:\n  - name: a\n    parent: world\n  - name: b\n")
+    assert doc.lines[()] == 1 and doc.lines[("name",)] == 1 and doc.lines[("frames",)] == 2
+    assert doc.lines[("frames", 0)] == 3 and doc.lines[("frames", 0, "parent")] == 4
+    assert doc.lines[("frames", 1, "name")] == 5
+
+
+@pytest.mark.parametrize("name", sorted(BOMBS))
+def test_bombs_are_refused_naming_the_problem(name: str) -> None:
+    text, fragment = BOMBS[name]
+    with pytest.raises(SpecError, match=fragment) as caught:
+        parse_task(text)
+    assert caught.value.line is not None
+
+
+def test_billion_laughs_is_refused_in_bounded_memory() -> None:
+    tracemalloc.start()
+    try:
+        with pytest.raises(SpecError):
+            read_yaml(billion_laughs())
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert peak < 4 << 20  # [byte]; expanded, the document is 10^9 strings
+
+
+def test_expansion_is_counted_through_aliases() -> None:
+    # 4 levels. As expanded: the root mapping and its 4 keys; a = 1 list + 9 scalars = 10;
+    # b = 1 + 9·10 = 91; c = 1 + 9·91 = 820; d = 1 + 9·820 = 7381. In all 5 + 8302 = 8307.
+    text = billion_laughs(4)
+    assert read_yaml(text, limits=YamlLimits(max_nodes=8307)).data["d"][0][0][0][0] == "lol"
+    with pytest.raises(SpecError, match="more than 8306 nodes"):
+        read_yaml(text, limits=YamlLimits(max_nodes=8306))
+
+
+def test_a_few_aliases_are_fine_in_a_task_file_but_not_in_the_service() -> None:
+    text = "a: &x [1, 2]\nb: *x\nc: {<<: {d: 1}}\n"
+    assert read_yaml(text).data == {"a": [1, 2], "b": [1, 2], "c": {"d": 1}}
+    with pytest.raises(SpecError, match=r"aliases \(\*name\) are not accepted") as caught:
+        read_yaml(text, limits=YAML_LIMITS)
+    assert caught.value.line == 2
+    with pytest.raises(SpecError, match="more than 1 YAML aliases"):
+        read_yaml("a: &x 1\nb: *x\nc: *x\n", limits=YamlLimits(max_aliases=1))
+
+
+def test_the_service_parses_with_the_same_loader() -> None:
+    with pytest.raises(SpecError, match="list longer than 10000 items"):
+        parse_spec(HUGE_LIST.encode())
+    with pytest.raises(SpecError, match="aliases"):
+        parse_spec(billion_laughs().encode())
+    assert parse_spec(SEED.read_bytes()).name == load_task(SEED).name
+
+
+def test_mapping_entries_are_bounded_too() -> None:
+    text = "".join(f"k{i}: {i}\n" for i in range(11))
+    with pytest.raises(SpecError, match="more than 10 entries"):
+        read_yaml(text, limits=YamlLimits(max_items=10))
+
+
+def test_one_document_only_and_aliases_need_an_anchor() -> None:
+    with pytest.raises(SpecError, match="single YAML document"):
+        read_yaml("a: 1\n---\nb: 2\n")
+    with pytest.raises(SpecError, match=r"\*b names no anchor"):
+        read_yaml("a: *b\n")
+
+
+def test_a_file_over_the_size_limit_is_not_read_whole(tmp_path: Path) -> None:
+    big = tmp_path / "big.yaml"
+    big.write_text("name: " + "x" * DEFAULT_LIMITS.max_bytes + "\n")
+    with pytest.raises(SpecError, match="over the limit of 1048576 bytes"):
+        load_task(big)
+    with pytest.raises(SpecError, match="over the limit of 100 bytes"):
+        parse_task("name: " + "x" * 100, limits=YamlLimits(max_bytes=100))
+
+
+@pytest.mark.parametrize("name", ["billion laughs", "recursive alias", "deep flow nesting"])
+def test_cli_exits_2_on_yaml_bombs(tmp_path: Path, name: str) -> None:
+    text, fragment = BOMBS[name]
+    task = tmp_path / "bomb.yaml"
+    task.write_text(text)
+    done = subprocess.run(
+        [sys.executable, "-m", "synth.cli", "errors", str(task), "--from", "a", "--to", "b"],
+        capture_output=True,
+        text=True,
+        timeout=60,  # [s] generous: the refusal itself takes milliseconds
+        check=False,
+    )
+    assert done.returncode == 2, done.stderr
+    assert fragment in done.stderr and "line" in done.stderr
