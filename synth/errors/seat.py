@@ -1,0 +1,186 @@
+"""What a seated pin teaches: the part's uncertainty once a pin stands in one of its holes.
+
+Seed IV ch. 5 (L2870–2890): "Inserting the first pin gives us information about the box
+location. Since this information can be used to reduce the search required for the second
+insertion …". When a pin has bottomed out in hole H of a part P, the hand's reading puts the
+pin's end (the seat) at m = s_true + ε, where s_true is the true seat and ε the reading's
+error: the hand positioning error carried to the pin's end plus the pin's play in the hole,
+
+    |ε| ≤ ε_max = ‖t_hand‖ + ‖θ_hand‖·d + (D_hole − D_pin)/2,
+
+with t_hand, θ_hand the hand-error block's translation and rotation bounds (vector norms) and d
+the grasp distance (the hand origin to the pin's end). The program then corrects P by the
+measured offset along the translation axes P's block bounds, P ← P·TRANS(NILROTN, Δ) with Δ the
+offset in P's axes (translation only: one point says nothing about P's turn about it; an axis
+P was exact in stays uncorrected, so the reading's error never enters it), and P's holes,
+affixed to it, move with it.
+
+Let P's error be the seed's block, True = Nominal ∘ transl(t) ∘ R(ω), with the seat at h in P's
+frame. Relative to the corrected frame C the true part is t' = −(R − I)·h − ε (in P's axes)
+with the same rotation ω. To first order (R − I)·h = ω × h, so for each axis i
+
+    |t'_i + (ω × h)_i| ≤ ε_max + ρ,   ρ = ‖h‖·Θ²,  Θ = ‖(ω bounds)‖,
+
+where ρ bounds the second-order terms (the exponential's, ≤ ‖h‖·Θ²/2, and the composition
+rot(x̂)·rot(ŷ)·rot(ẑ) against exp([ω]×), ≤ ‖h‖·Θ²/2), so the rows are certified. These rows
+join the part's block as linear constraints (``Uncertainty.constraints``); each translation
+also gets the box bound |t'_i| ≤ ε_max + ρ + Σ_j |∂(ω × h)_i/∂ω_j|·θ_j,max that they imply. The
+rotations keep their bounds, and the old block's constraints on rotations only. The next
+step's footprint, tap and search are then the LP's over this block.
+
+Only a part that is the single uncertain link between the hole and the world is corrected (a
+box on the table; not a hole toleranced inside an uncertain box, nor a part located by
+contacts, whose block the planner derives).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from synth.models.graph import AttributeGraph
+from synth.models.insertion import derive
+from synth.models.spec import (
+    ROTATION_PARAMS,
+    TRANSLATION_PARAMS,
+    WORLD,
+    Bound,
+    HoleShape,
+    InsertionSpec,
+    LinearConstraint,
+    PinShape,
+    Pose,
+    TaskSpec,
+    Uncertainty,
+)
+
+__all__ = ["SeatKnowledge", "after_seat", "seat_error"]
+
+
+@dataclass(frozen=True)
+class SeatKnowledge:
+    """The part a seated pin located, and the task as the next step believes it.
+
+    ``part``/``part_al`` name the corrected part, ``corrected`` the translation axes (of its
+    frame) the correction moves it along, ``seat`` [m] is h (the seat in the part's
+    frame), ``epsilon`` [m] the reading's error bound ε_max, ``before``/``after`` the part's
+    block, and ``spec`` the task with the pin standing in its hole and ``after`` in place.
+    """
+
+    part: str
+    part_al: str
+    hole_al: str
+    pin_al: str
+    d_f: float
+    corrected: tuple[str, ...]
+    seat: tuple[float, float, float]
+    epsilon: float
+    before: Uncertainty
+    after: Uncertainty
+    spec: TaskSpec
+
+
+def seat_error(spec: TaskSpec, insertion: InsertionSpec, grasp_distance: float) -> float:
+    """ε_max [m] (module docstring): hand error at the pin's end plus the pin's radial play."""
+    graph = AttributeGraph(spec)
+    pin_shape = graph.nodes[graph.resolve(insertion.pin)].shape
+    hole_shape = graph.nodes[graph.resolve(insertion.hole)].shape
+    assert isinstance(pin_shape, PinShape) and isinstance(hole_shape, HoleShape)
+    play = max(0.0, (hole_shape.diameter - pin_shape.diameter) / 2)
+    hand = spec.manipulator.hand_error if spec.manipulator is not None else None
+    if hand is None:
+        return play
+    bounds = hand.bounds()
+
+    def norm(params: tuple[str, ...]) -> float:
+        return math.sqrt(sum(max(-b.lo, b.hi) ** 2 for p, b in bounds.items() if p in params))
+
+    return norm(TRANSLATION_PARAMS) + norm(ROTATION_PARAMS) * grasp_distance + play
+
+
+def _corrected_part(graph: AttributeGraph, hole: str) -> str | None:
+    """The single uncertain link between ``hole`` and the world, if it is the hole's part."""
+    uncertain = []
+    for name in graph.ancestors(hole):
+        block = graph.links[name].uncertainty if name != WORLD else None
+        if block is not None and block.bounds():
+            uncertain.append(name)
+    if len(uncertain) != 1 or uncertain[0] == hole:
+        return None
+    return uncertain[0]
+
+
+def _cross_coefficients(h: np.ndarray) -> dict[str, dict[str, float]]:
+    """∂(ω × h)_i / ∂ω_j: (ω × h) = (ry·h_z − rz·h_y, rz·h_x − rx·h_z, rx·h_y − ry·h_x)."""
+    hx, hy, hz = (float(v) for v in h)
+    return {
+        "x": {"ry": hz, "rz": -hy},
+        "y": {"rz": hx, "rx": -hz},
+        "z": {"rx": hy, "ry": -hx},
+    }
+
+
+def after_seat(
+    spec: TaskSpec, insertion: InsertionSpec, grasp_distance: float
+) -> SeatKnowledge | None:
+    """The knowledge a seated ``insertion`` gives (module docstring); None if nothing is learnt."""
+    graph = AttributeGraph(spec)
+    hole = graph.resolve(insertion.hole)
+    part = _corrected_part(graph, hole)
+    if part is None:
+        return None
+    before = graph.links[part].uncertainty
+    assert before is not None
+    d_f = derive(graph, insertion).d_f
+    seat_in_part = graph.relative(part, hole).act(np.array([0.0, 0.0, -d_f]))
+    epsilon = seat_error(spec, insertion, grasp_distance)
+    rotations = {p: b for p, b in before.bounds().items() if p in ROTATION_PARAMS}
+    theta = math.sqrt(sum(max(-b.lo, b.hi) ** 2 for b in rotations.values()))
+    rho = float(np.linalg.norm(seat_in_part)) * theta**2
+    half = epsilon + rho
+    coefficients = _cross_coefficients(seat_in_part)
+    fields: dict[str, Bound] = dict(rotations)
+    constraints: list[LinearConstraint] = []
+    corrected = tuple(a for a in TRANSLATION_PARAMS if a in before.bounds())
+    for axis in corrected:
+        terms = {j: c for j, c in coefficients[axis].items() if j in rotations and c != 0.0}
+        reach = sum(abs(c) * max(-rotations[j].lo, rotations[j].hi) for j, c in terms.items())
+        fields[axis] = Bound(lo=-(half + reach), hi=half + reach)
+        if terms:
+            constraints.append(
+                LinearConstraint.model_construct(
+                    terms={axis: 1.0, **terms}, min=-half, max=half, kind="length"
+                )
+            )
+    kept = [c for c in before.constraints if all(p in ROTATION_PARAMS for p in c.terms)]
+    after = Uncertainty.model_construct(
+        None,
+        constraints=(*constraints, *kept),
+        distribution=before.distribution,
+        **fields,
+    )
+    pin_name = graph.resolve(insertion.pin)
+    frames = []
+    seated = Pose.model_validate({"translation": ["0 m", "0 m", f"{-d_f!r} m"]})
+    for f in spec.frames:
+        if f.name == part:
+            f = f.model_copy(update={"uncertainty": after})
+        elif f.name == pin_name:
+            f = f.model_copy(update={"parent": hole, "pose": seated})
+        frames.append(f)
+    next_spec = spec.model_copy(update={"frames": tuple(frames)})
+    return SeatKnowledge(
+        part=part,
+        part_al=graph.al_names[part],
+        hole_al=graph.al_names[hole],
+        pin_al=graph.al_names[pin_name],
+        d_f=d_f,
+        corrected=corrected,
+        seat=tuple(float(v) for v in seat_in_part),  # type: ignore[arg-type]
+        epsilon=epsilon,
+        before=before,
+        after=after,
+        spec=next_spec,
+    )
