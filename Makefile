@@ -4,7 +4,10 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test lint typecheck bench clean
+.PHONY: demo test lint typecheck bench fuzz clean
+
+FUZZ_CASES ?= 1000
+FUZZ_ARGS  ?=
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -30,6 +33,10 @@ test: $(STAMP) lint typecheck
 
 bench: $(STAMP)
 	for b in benchmarks/*.py; do $(BIN)/python $$b || exit 1; done
+
+# N hostile cases per surface (task specs, AL programs, the API); a table of counts (docs/api.md).
+fuzz: $(STAMP)
+	$(BIN)/python tests/fuzz/fuzzrun.py --cases $(FUZZ_CASES) $(FUZZ_ARGS)
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache .ruff_cache .mypy_cache

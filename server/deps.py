@@ -31,6 +31,11 @@ def current_settings(app: FastAPI) -> Settings:
     return settings
 
 
+def client_key(request: Request) -> str:
+    """The key fair lanes count a request's jobs under: its peer address (host only)."""
+    return request.client.host if request.client is not None else "-"
+
+
 def get_service(request: Request) -> PlanService:
     """The app's :class:`PlanService` (built at startup)."""
     service = request.app.state.service
@@ -70,6 +75,7 @@ __all__ = [
     "ServiceDep",
     "SettingsDep",
     "Writer",
+    "client_key",
     "current_settings",
     "get_service",
     "require_reader",

@@ -22,7 +22,13 @@ request schema errors (FastAPI)       422     ``errors`` (``loc`` and ``msg`` pe
 :class:`ReplayUnavailable`            503
 :class:`TimeBudgetExceeded`           504     ``budget_seconds``
 anything else, :class:`WorkerFailed`  500     nothing but a request id; the traceback is logged
+:class:`RequestTimeout`               408     (``Connection: close``)
+:class:`TooManyRequests`              429     ``running``, ``waiting`` (``Retry-After``)
 ====================================  ======  =============================================
+
+An exception no handler claims is answered by :class:`ProblemMiddleware`, inside Starlette's
+``ServerErrorMiddleware``: that one re-raises after answering, and uvicorn then closes the
+connection, so a 500 would drop the client's keep-alive connection.
 """
 
 from __future__ import annotations
@@ -38,6 +44,7 @@ from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from server.exceptions import (
     ApiError,
@@ -46,9 +53,11 @@ from server.exceptions import (
     NotFound,
     PayloadTooLarge,
     ReplayUnavailable,
+    RequestTimeout,
     ServiceBusy,
     StageUnavailable,
     TimeBudgetExceeded,
+    TooManyRequests,
     Unauthorized,
     UnsupportedMediaType,
     WorkerFailed,
@@ -220,13 +229,49 @@ async def _on_http_exception(_request: Request, exc: Exception) -> JSONResponse:
 _HTTP_TITLES = {400: "Bad request", 404: "Not found", 405: "Method not allowed"}
 
 
+class ProblemMiddleware:
+    """Answer any exception that escapes the app with its problem document, and swallow it.
+
+    The connection stays open (keep-alive) because nothing re-raises to the server. An
+    exception after the response started cannot be answered any more: it is re-raised.
+    """
+
+    def __init__(self, app: ASGIApp) -> None:
+        self.app = app
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        """Run the app; turn an unhandled exception into a problem response."""
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        started = False
+
+        async def tracking_send(message: Message) -> None:
+            nonlocal started
+            if message["type"] == "http.response.start":
+                started = True
+            await send(message)
+
+        try:
+            await self.app(scope, receive, tracking_send)
+        except Exception as exc:
+            if started:
+                raise
+            await problem_response(exc)(scope, receive, send)
+
+
 def install_error_handlers(app: FastAPI) -> None:
-    """Route every exception through :func:`problem_for` (the last one is the catch-all)."""
+    """Route every exception through :func:`problem_for` (the last one is the catch-all).
+
+    Call it after every other ``add_middleware``: :class:`ProblemMiddleware` must be the
+    outermost of the app's own middleware, so that it also answers their exceptions.
+    """
     app.add_exception_handler(ApiError, _on_exception)
     app.add_exception_handler(sx.SynthError, _on_exception)
     app.add_exception_handler(RequestValidationError, _on_request_validation)
     app.add_exception_handler(StarletteHTTPException, _on_http_exception)
     app.add_exception_handler(Exception, _on_exception)
+    app.add_middleware(ProblemMiddleware)
 
 
 __all__ = [
@@ -236,10 +281,13 @@ __all__ = [
     "MemoryBudgetExceeded",
     "NotFound",
     "PayloadTooLarge",
+    "ProblemMiddleware",
     "ReplayUnavailable",
+    "RequestTimeout",
     "ServiceBusy",
     "StageUnavailable",
     "TimeBudgetExceeded",
+    "TooManyRequests",
     "Unauthorized",
     "UnsupportedMediaType",
     "WorkerFailed",

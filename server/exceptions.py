@@ -59,6 +59,22 @@ class UnsupportedMediaType(ApiError):
     title = "Unsupported media type"
 
 
+class RequestTimeout(ApiError):
+    """The request body did not arrive within the body deadline (a slow or stalled client)."""
+
+    status = 408
+    title = "Request timeout"
+    headers: ClassVar[Mapping[str, str]] = {"Connection": "close"}
+
+
+class TooManyRequests(ApiError):
+    """The client already has as many jobs running and waiting as the server lets one client."""
+
+    status = 429
+    title = "Too many requests from this client"
+    headers: ClassVar[Mapping[str, str]] = {"Retry-After": "5"}
+
+
 class ServiceBusy(ApiError):
     """No worker became free within the time budget (or none could be started)."""
 
@@ -112,9 +128,11 @@ __all__ = [
     "NotFound",
     "PayloadTooLarge",
     "ReplayUnavailable",
+    "RequestTimeout",
     "ServiceBusy",
     "StageUnavailable",
     "TimeBudgetExceeded",
+    "TooManyRequests",
     "Unauthorized",
     "UnsupportedMediaType",
     "WorkerFailed",

@@ -17,6 +17,7 @@ from server import service
 from server.db import PlanStore
 from server.deps import current_settings
 from server.errors import install_error_handlers
+from server.lanes import Lanes
 from server.limits import BodyLimitMiddleware
 from server.routers import health, plans, replays
 from server.settings import Settings, get_settings
@@ -43,7 +44,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             memory_limit=settings.worker_memory_mib * 2**20,
         )
         await pool.start()
-        app.state.service = service.PlanService(store, pool)
+        lanes = Lanes(settings.workers, settings.client_jobs, settings.queue_per_client)
+        app.state.service = service.PlanService(store, pool, lanes)
         try:
             yield
         finally:
@@ -57,10 +59,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         lifespan=lifespan,
     )
     app.dependency_overrides[get_settings] = lambda: settings
-    install_error_handlers(app)
     app.add_middleware(
-        BodyLimitMiddleware, limit=lambda _scope: current_settings(app).max_body_bytes
+        BodyLimitMiddleware,
+        limit=lambda _scope: current_settings(app).max_body_bytes,
+        timeout=lambda _scope: current_settings(app).body_timeout,
     )
+    install_error_handlers(app)  # last: its middleware wraps the others
     app.include_router(health.router)
     app.include_router(plans.router)
     app.include_router(replays.router)

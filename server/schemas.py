@@ -39,6 +39,33 @@ class Problem(BaseModel):
     detail: str
 
 
+_PROBLEM_MEANINGS = {
+    400: "the body could not be read as the endpoint's media type (e.g. JSON that is not UTF-8)",
+    401: "a token is configured and the request lacks it",
+    404: "no such plan",
+    408: "the request body did not arrive within the server's body timeout",
+    413: "the request body is over the server's limit",
+    415: "the body's media type is not accepted",
+    422: "the request or the task is invalid, or no program can be made for it",
+    429: "this client already has as many jobs running and queued as the server allows",
+    500: "an internal error (logged with the request id); never caused by the input alone",
+    503: "no worker became free within the time budget, or a stage is missing from this build",
+    504: "the job ran past the time budget and was stopped",
+}
+
+
+def problem_responses(*statuses: int) -> dict[int | str, dict[str, Any]]:
+    """OpenAPI ``responses`` entries for ``statuses``: problem documents with their meaning."""
+    return {
+        status: {
+            "model": Problem,
+            "content": {"application/problem+json": {}},
+            "description": _PROBLEM_MEANINGS[status],
+        }
+        for status in statuses
+    }
+
+
 class PlanOptionsOut(BaseModel):
     """The options a plan was made with."""
 
@@ -159,4 +186,5 @@ __all__ = [
     "PlanSummary",
     "Problem",
     "ReplayIn",
+    "problem_responses",
 ]

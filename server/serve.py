@@ -18,6 +18,7 @@ def serve(
     """Run the service until interrupted; 2 on a configuration error (like any CLI error)."""
     import uvicorn
 
+    from server.connections import uvicorn_config
     from server.main import create_app
 
     try:
@@ -43,7 +44,8 @@ def serve(
             "it can submit work (set --token or SYNTH_TOKEN)",
             file=sys.stderr,
         )
-    uvicorn.run(create_app(settings), host=host, port=port, log_level="info")
+    config = uvicorn_config(create_app(settings), settings, host, port, log_level="info")
+    uvicorn.Server(config).run()
     return 0
 
 

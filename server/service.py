@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import synth
 from server.exceptions import NotFound, ReplayUnavailable, UnsupportedMediaType
+from server.lanes import Lanes
 from server.modelpaths import confine_model_files
 from server.settings import Settings
 from server.workers import WorkerPool
@@ -272,14 +273,32 @@ def _finite_json(value: Any) -> Any:
 
 
 class PlanService:
-    """Plans and replays for the routes: validation, budgets, de-duplication, storage."""
+    """Plans and replays for the routes: validation, budgets, de-duplication, storage.
 
-    def __init__(self, store: PlanStore, pool: WorkerPool) -> None:
+    Every job first takes a slot of :attr:`lanes` for its client (:mod:`server.lanes`), then
+    runs in :attr:`pool`: it waits at most ``plan_timeout`` for a slot and then runs at most
+    ``plan_timeout``.
+    """
+
+    def __init__(self, store: PlanStore, pool: WorkerPool, lanes: Lanes | None = None) -> None:
         self.store = store
         self.pool = pool
+        self.lanes = lanes if lanes is not None else Lanes(pool.size, pool.size, 0)
+
+    async def run_job(
+        self, client: str, fn: Callable[..., Any], *args: Any, timeout: float, what: str
+    ) -> Any:
+        """``fn(*args)`` in a worker, once ``client`` holds a lane slot (module rule)."""
+        async with self.lanes.slot(client, timeout):
+            return await self.pool.run(fn, *args, timeout=timeout, what=what)
 
     async def create_plan(
-        self, body: bytes, content_type: str | None, options: PlanOptions, settings: Settings
+        self,
+        body: bytes,
+        content_type: str | None,
+        options: PlanOptions,
+        settings: Settings,
+        client: str = "-",
     ) -> tuple[StoredPlan, bool]:
         """Plan the task in ``body``; return the stored plan and whether it is new.
 
@@ -293,7 +312,8 @@ class PlanService:
         twin = await asyncio.to_thread(self.store.by_hash, key)
         if twin is not None:
             return twin, False
-        outcome = await self.pool.run(
+        outcome = await self.run_job(
+            client,
             plan_job,
             body,
             kind,
@@ -338,6 +358,7 @@ class PlanService:
         trials: int,
         seed: int,
         settings: Settings,
+        client: str = "-",
     ) -> dict[str, Any]:
         """Replay ``program`` (default: the stored plan's) against ``spec`` or the stored task."""
         kind: SpecKind = "yaml"
@@ -350,7 +371,8 @@ class PlanService:
         else:
             assert spec is not None and program is not None  # the request schema ensures it
             spec_body = spec
-        report = await self.pool.run(
+        report = await self.run_job(
+            client,
             replay_job,
             program,
             spec_body,
@@ -370,7 +392,13 @@ class PlanService:
             "status": "ok" if database and self.pool.alive > 0 else "degraded",
             "version": synth.__version__,
             "database": "ok" if database else "unreachable",
-            "workers": {"size": self.pool.size, "alive": self.pool.alive, "idle": self.pool.ready},
+            "workers": {
+                "size": self.pool.size,
+                "alive": self.pool.alive,
+                "idle": self.pool.ready,
+                "running": self.lanes.running,
+                "waiting": self.lanes.waiting,
+            },
             "stages": dict(self.pool.info),
         }
 

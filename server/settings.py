@@ -40,6 +40,16 @@ class Settings:
     only directories a task's URDF, SRDF and package references may resolve into.
     ``worker_memory_mib`` [SYNTH_WORKER_MEMORY_MIB] [MiB]: address-space cap of each worker
     (0: none); a job that needs more is refused with 422.
+
+    Fair lanes (:mod:`server.lanes`): ``jobs_per_client`` [SYNTH_JOBS_PER_CLIENT] jobs of one
+    client (peer address) run at once (0: ``workers - 1``, at least 1), and
+    ``queue_per_client`` [SYNTH_QUEUE_PER_CLIENT] more may wait (429 beyond).
+    Connections (:mod:`server.connections`): ``header_timeout`` [SYNTH_HEADER_TIMEOUT] [s] to
+    send a request's headers, from connecting or from the end of the previous response;
+    ``keep_alive_timeout`` [SYNTH_KEEP_ALIVE_TIMEOUT] [s] of silence before an idle
+    keep-alive connection is closed; ``body_timeout`` [SYNTH_BODY_TIMEOUT] [s] to send a
+    request body (408 after); ``max_connections`` [SYNTH_MAX_CONNECTIONS] open at once (503
+    beyond).
     """
 
     token: str | None = None
@@ -52,6 +62,12 @@ class Settings:
     workers: int = field(default_factory=lambda: max(1, min(4, os.cpu_count() or 1)))
     model_dirs: tuple[Path, ...] = ()
     worker_memory_mib: int = 4096
+    jobs_per_client: int = 0
+    queue_per_client: int = 4
+    header_timeout: float = 10.0
+    keep_alive_timeout: float = 5.0
+    body_timeout: float = 30.0
+    max_connections: int = 256
 
     def __post_init__(self) -> None:
         if self.token == "":
@@ -64,12 +80,24 @@ class Settings:
             raise ValueError("max_body_bytes must be positive")
         if not 0 <= self.default_trials <= self.max_trials:
             raise ValueError("need 0 <= default_trials <= max_trials")
-        if self.plan_timeout <= 0:
+        if not self.plan_timeout > 0:
             raise ValueError("plan_timeout must be positive [s]")
         if self.workers < 1:
             raise ValueError("workers must be at least 1")
         if self.worker_memory_mib < 0:
             raise ValueError("worker_memory_mib must be >= 0 (0: no cap)")
+        if self.jobs_per_client < 0 or self.queue_per_client < 0:
+            raise ValueError("jobs_per_client and queue_per_client must be >= 0")
+        for name in ("header_timeout", "keep_alive_timeout", "body_timeout"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be positive [s]")
+        if self.max_connections < 1:
+            raise ValueError("max_connections must be at least 1")
+
+    @property
+    def client_jobs(self) -> int:
+        """Jobs one client may run at once: ``jobs_per_client``, or ``workers - 1`` (>= 1)."""
+        return self.jobs_per_client or max(1, self.workers - 1)
 
     def with_(self, **changes: Any) -> Settings:
         """A copy with ``changes`` applied (the CLI's flags over the environment)."""
@@ -93,6 +121,12 @@ def settings_from_env(env: Mapping[str, str] | None = None) -> Settings:
         ("SYNTH_PLAN_TIMEOUT", "plan_timeout", float),
         ("SYNTH_WORKERS", "workers", int),
         ("SYNTH_WORKER_MEMORY_MIB", "worker_memory_mib", int),
+        ("SYNTH_JOBS_PER_CLIENT", "jobs_per_client", int),
+        ("SYNTH_QUEUE_PER_CLIENT", "queue_per_client", int),
+        ("SYNTH_HEADER_TIMEOUT", "header_timeout", float),
+        ("SYNTH_KEEP_ALIVE_TIMEOUT", "keep_alive_timeout", float),
+        ("SYNTH_BODY_TIMEOUT", "body_timeout", float),
+        ("SYNTH_MAX_CONNECTIONS", "max_connections", int),
     ):
         if name in env:
             try:

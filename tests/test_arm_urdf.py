@@ -110,6 +110,13 @@ def test_continuous_joint_is_rejected(tmp_path: Path):
         load_urdf_arm(path, "tip", HandSpec())
 
 
+def test_a_urdf_without_joints_is_an_arm_model_error(tmp_path: Path):
+    path = tmp_path / "plank.urdf"
+    path.write_text("<?xml version='1.0'?>\n<robot name='plank'><link name='base'/></robot>\n")
+    with pytest.raises(ArmModelError, match="no movable joints"):
+        load_urdf_arm(path, "base", HandSpec())
+
+
 def test_task_spec_names_a_urdf_with_relative_paths_and_overrides(planar: Path):
     spec = ArmSpec(
         urdf="planar.urdf",

@@ -8,15 +8,15 @@ from fastapi import APIRouter, Query, Request, Response
 from fastapi.responses import PlainTextResponse
 
 from server.db import StoredPlan
-from server.deps import Reader, ServiceDep, SettingsDep, Writer
+from server.deps import Reader, ServiceDep, SettingsDep, Writer, client_key
 from server.exceptions import InvalidRequest
-from server.schemas import PlanLinks, PlanOut, PlanPage, PlanSummary, Problem
+from server.schemas import PlanLinks, PlanOut, PlanPage, PlanSummary, problem_responses
 from server.service import PlanOptions
 from server.settings import Settings
 
 router = APIRouter(prefix="/v1/plans", tags=["plans"])
 
-_PROBLEM = {"model": Problem, "content": {"application/problem+json": {}}}
+MAX_CURSOR = 2**63 - 1  # plan sequence numbers are SQL 64-bit integers
 
 _SPEC_EXAMPLE = """\
 name: seed_4_8
@@ -83,12 +83,7 @@ def _trials(requested: int | None, settings: Settings) -> int:
     summary="Plan a task, generate its AL program and validate it by replay",
     responses={
         200: {"model": PlanOut, "description": "an identical submission was already planned"},
-        401: _PROBLEM,
-        413: _PROBLEM,
-        415: _PROBLEM,
-        422: _PROBLEM,
-        503: _PROBLEM,
-        504: _PROBLEM,
+        **problem_responses(400, 401, 408, 413, 415, 422, 429, 500, 503, 504),
     },
 )
 async def create_plan(
@@ -115,7 +110,7 @@ async def create_plan(
     )
     body = await request.body()
     plan, created = await service.create_plan(
-        body, request.headers.get("content-type"), options, settings
+        body, request.headers.get("content-type"), options, settings, client_key(request)
     )
     response.headers["Location"] = f"/v1/plans/{plan.id}"
     if not created:
@@ -128,13 +123,13 @@ async def create_plan(
     response_model=PlanPage,
     dependencies=[Reader],
     summary="List plans, newest first",
-    responses={401: _PROBLEM, 422: _PROBLEM},
+    responses=problem_responses(401, 422, 500),
 )
 async def list_plans(
     service: ServiceDep,
     limit: Annotated[int, Query(ge=1, le=100, description="plans per page")] = 20,
     cursor: Annotated[
-        int | None, Query(ge=1, description="next_cursor of the previous page")
+        int | None, Query(ge=1, le=MAX_CURSOR, description="next_cursor of the previous page")
     ] = None,
 ) -> PlanPage:
     """A page of plan summaries and the link to the next page."""
@@ -160,7 +155,7 @@ async def list_plans(
     response_model=PlanOut,
     dependencies=[Reader],
     summary="A stored plan",
-    responses={401: _PROBLEM, 404: _PROBLEM},
+    responses=problem_responses(401, 404, 500),
 )
 async def get_plan(plan_id: str, service: ServiceDep) -> dict[str, Any]:
     """The plan as it was answered when it was created."""
@@ -172,7 +167,7 @@ async def get_plan(plan_id: str, service: ServiceDep) -> dict[str, Any]:
     response_class=PlainTextResponse,
     dependencies=[Reader],
     summary="A stored plan's AL program",
-    responses={200: {"content": {"text/plain": {}}}, 401: _PROBLEM, 404: _PROBLEM},
+    responses={200: {"content": {"text/plain": {}}}, **problem_responses(401, 404, 500)},
 )
 async def get_program(plan_id: str, service: ServiceDep) -> PlainTextResponse:
     """The generated AL program as ``text/plain``."""

@@ -4,15 +4,13 @@ from __future__ import annotations
 
 from typing import Any
 
-from fastapi import APIRouter
+from fastapi import APIRouter, Request
 
-from server.deps import ServiceDep, SettingsDep, Writer
+from server.deps import ServiceDep, SettingsDep, Writer, client_key
 from server.exceptions import InvalidRequest
-from server.schemas import Problem, ReplayIn
+from server.schemas import ReplayIn, problem_responses
 
 router = APIRouter(prefix="/v1/replays", tags=["replays"])
-
-_PROBLEM = {"model": Problem, "content": {"application/problem+json": {}}}
 
 
 @router.post(
@@ -21,26 +19,27 @@ _PROBLEM = {"model": Problem, "content": {"application/problem+json": {}}}
     summary="Replay an AL program against a task spec or a stored plan's task",
     responses={
         200: {"description": "the replay report (same shape as `synth replay --json`)"},
-        401: _PROBLEM,
-        404: _PROBLEM,
-        413: _PROBLEM,
-        422: _PROBLEM,
-        503: _PROBLEM,
-        504: _PROBLEM,
+        **problem_responses(400, 401, 404, 408, 413, 422, 429, 500, 503, 504),
     },
 )
 async def create_replay(
-    request: ReplayIn, service: ServiceDep, settings: SettingsDep
+    replay: ReplayIn, request: Request, service: ServiceDep, settings: SettingsDep
 ) -> dict[str, Any]:
     """The replay report of the program."""
-    trials = settings.default_trials if request.trials is None else request.trials
+    trials = settings.default_trials if replay.trials is None else replay.trials
     if trials > settings.max_trials:
         raise InvalidRequest(
             f"trials={trials} is more than this server allows ({settings.max_trials})",
             parameter="trials",
         )
     return await service.replay(
-        request.program, request.spec, request.plan_id, trials, request.seed, settings
+        replay.program,
+        replay.spec,
+        replay.plan_id,
+        trials,
+        replay.seed,
+        settings,
+        client_key(request),
     )
 
 

@@ -37,7 +37,12 @@ _PRISMATIC = {"JointModelPX", "JointModelPY", "JointModelPZ", "JointModelPrismat
 
 
 def joint_kinds(model: pin.Model, source: str = "") -> tuple[JointKind, ...]:
-    """``revolute`` / ``prismatic`` for joints 1..n; :class:`ArmModelError` for any other type."""
+    """``revolute`` / ``prismatic`` for joints 1..n; :class:`ArmModelError` for any other type.
+
+    A model without joints (a fixed link tree) cannot move the hand, so it is refused too.
+    """
+    if model.njoints <= 1:
+        raise ArmModelError("the model has no movable joints; an arm needs at least one", source)
     kinds: list[JointKind] = []
     for j in range(1, model.njoints):
         short = model.joints[j].shortname()

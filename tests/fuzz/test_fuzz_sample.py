@@ -1,0 +1,86 @@
+"""The fuzz harness in the ordinary test run: it tells crashes, hangs and memory blow-ups apart,
+and a small fixed sample of every surface (task specs, AL programs, the API) comes out clean."""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+import fuzzgen
+import fuzzrun
+import pytest
+
+from synth.al.parser import parse_program
+
+
+def _fake_main(argv: list[str]) -> int:
+    """A stand-in CLI whose first argument says how it ends."""
+    what = argv[0]
+    if what == "hang":
+        time.sleep(60)
+    if what == "memory":
+        hog = b"x" * (400 * 2**20)  # written, so resident
+        time.sleep(60)
+        return len(hog)
+    if what == "crash":
+        print("synth x: internal error: ValueError: zero-size array 3", file=sys.stderr)
+        return 70
+    if what == "die":
+        import os
+
+        os._exit(9)
+    if what == "usage":
+        raise SystemExit(2)
+    return 0
+
+
+def test_the_sandbox_tells_outcomes_apart() -> None:
+    sandbox = fuzzrun.Sandbox(timeout=1.0, memory_mib=200, entry=_fake_main)
+    try:
+        started = time.monotonic()
+        outcomes = {w: sandbox.run([w], {}) for w in ("ok", "usage", "crash", "hang", "memory")}
+        outcomes["die"] = sandbox.run(["die"], {})
+        outcomes["after"] = sandbox.run(["ok"], {})  # a fresh child after the kills
+    finally:
+        sandbox.close()
+    assert {w: r.outcome for w, r in outcomes.items()} == {
+        "ok": "ok",
+        "usage": "ok",
+        "crash": "crash",
+        "hang": "hang",
+        "memory": "memory",
+        "die": "crash",
+        "after": "ok",
+    }
+    assert outcomes["crash"].key == "crash: ValueError: zero-size array N"
+    assert time.monotonic() - started < 15
+
+
+def test_mutations_edit_one_node_of_a_copy() -> None:
+    tree = {"frames": [{"name": "a"}, {"name": "b"}], "x": "1 cm"}
+    assert fuzzgen._replace(tree, ("frames", 1, "name"), lambda _n: "TRUE") == {
+        "frames": [{"name": "a"}, {"name": "TRUE"}],
+        "x": "1 cm",
+    }
+    assert fuzzgen._replace(tree, ("frames", 0), lambda _n: fuzzgen._DROP)["frames"] == [
+        {"name": "b"}
+    ]
+    assert len(fuzzgen._replace(tree, ("frames", 0), lambda _n: fuzzgen._DUPLICATE)["frames"]) == 3
+    assert fuzzgen._replace(tree, ("x",), lambda n: fuzzgen._scale(n, 300))["x"] == "1e+300 cm"
+    assert tree == {"frames": [{"name": "a"}, {"name": "b"}], "x": "1 cm"}  # unchanged
+    assert ("frames", 1, "name") in fuzzgen._paths(tree)
+
+
+def test_the_unmutated_golden_programs_parse() -> None:
+    for path in fuzzgen.GOLDEN:  # the AL generator starts from programs that are valid
+        parse_program(path.read_text())
+
+
+@pytest.mark.parametrize("surface", fuzzrun.SURFACES)
+def test_a_fixed_sample_of_each_surface_is_clean(surface: str, tmp_path: Path) -> None:
+    (tally,) = fuzzrun.run(8, (surface,), timeout=20.0, out=tmp_path, seed=19, budget=20.0)
+    assert tally.cases >= 4, tally
+    assert fuzzrun.table([tally]).splitlines()[1].split()[0] == surface
+    bad = {o: tally.counts[o] for o in fuzzrun.OUTCOMES if o != "ok" and tally.counts[o]}
+    assert not bad, fuzzrun.table([tally])

@@ -1,0 +1,98 @@
+"""No 500 on client input: the inputs that used to crash the service get a 4xx problem, every
+status a POST can answer is in the OpenAPI schema, and an unexpected error is a 500 problem the
+app answers itself (it does not propagate to the server, which would drop the connection)."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+from collections.abc import Iterator
+from pathlib import Path
+
+import httpx
+import pytest
+from _server_support import HAVE_PLANNER, SEED, YAML, client_for, overridden
+from fastapi.testclient import TestClient
+
+from server.main import create_app
+from server.settings import Settings
+
+NO_JOINTS_URDF = "<?xml version='1.0'?>\n<robot name='plank'><link name='base'/></robot>\n"
+
+
+@pytest.fixture(scope="module")
+def client(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TestClient]:
+    db = tmp_path_factory.mktemp("robust") / "plans.db"
+    with client_for(Settings(db_url=str(db), workers=1, plan_timeout=60.0)) as c:
+        yield c
+
+
+def problem(response: httpx.Response, status: int) -> dict[str, object]:
+    assert response.status_code == status, response.text
+    assert response.headers["content-type"].startswith("application/problem+json")
+    body = response.json()
+    assert body["status"] == status and body["title"] and body["detail"]
+    return dict(body)
+
+
+def test_a_cursor_beyond_64_bits_is_422_not_a_database_overflow(client: TestClient) -> None:
+    body = problem(client.get("/v1/plans", params={"cursor": str(2**63)}), 422)
+    assert "cursor" in str(body["detail"])
+    assert client.get("/v1/plans", params={"cursor": str(2**63 - 1)}).status_code == 200
+
+
+def test_a_json_body_that_is_not_utf8_is_a_documented_400(client: TestClient) -> None:
+    answer = client.post(
+        "/v1/replays", content=b'{"program": "\xff"}', headers={"Content-Type": "application/json"}
+    )
+    problem(answer, 400)
+    schema = client.get("/openapi.json").json()
+    assert "400" in schema["paths"]["/v1/replays"]["post"]["responses"]
+
+
+def test_every_post_documents_the_statuses_the_service_answers(client: TestClient) -> None:
+    schema = client.get("/openapi.json").json()
+    for path in ("/v1/plans", "/v1/replays"):
+        responses = schema["paths"][path]["post"]["responses"]
+        for status in ("400", "401", "408", "413", "422", "429", "500", "503", "504"):
+            assert status in responses, (path, status)
+            assert "application/problem+json" in responses[status]["content"]
+    listing = schema["paths"]["/v1/plans"]["get"]
+    cursor = next(p for p in listing["parameters"] if p["name"] == "cursor")
+    assert cursor["schema"]["anyOf"][0]["maximum"] == 2**63 - 1
+
+
+@pytest.mark.skipif(not HAVE_PLANNER, reason="planner/codegen not in this build")
+def test_an_in_directory_urdf_without_joints_is_422(client: TestClient, tmp_path: Path) -> None:
+    models = tmp_path / "models"
+    models.mkdir()
+    (models / "plank.urdf").write_text(NO_JOINTS_URDF)
+    spec = SEED.read_text().replace(
+        "    model: stanford", f"    urdf: {json.dumps('plank.urdf')}\n    tool_frame: base", 1
+    )
+    with overridden(client.app, model_dirs=(models,)):  # type: ignore[arg-type]
+        answer = client.post("/v1/plans?validate=false", content=spec, headers=YAML)
+    body = problem(answer, 422)
+    assert "no movable joints" in str(body["detail"])
+
+
+def test_an_unhandled_error_is_answered_by_the_app_not_raised_to_the_server(
+    tmp_path: Path,
+) -> None:
+    app = create_app(Settings(db_url=str(tmp_path / "boom.db"), workers=1))
+
+    @app.get("/boom", include_in_schema=False)  # type: ignore[untyped-decorator]
+    async def boom() -> None:
+        raise KeyError("internal detail")
+
+    async def scenario() -> httpx.Response:
+        # raise_app_exceptions: an exception leaving the app would fail this call, as it makes
+        # uvicorn close the connection after the 500.
+        transport = httpx.ASGITransport(app=app, raise_app_exceptions=True)
+        async with httpx.AsyncClient(transport=transport, base_url="http://t") as http:
+            return await http.get("/boom")
+
+    answer = asyncio.run(scenario())
+    body = problem(answer, 500)
+    assert body["type"] == "urn:synth:problem:internal"
+    assert "internal detail" not in answer.text
