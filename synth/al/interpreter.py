@@ -109,7 +109,7 @@ from synth.al.machine import (
     TorqueConstraint,
     TorqueMonitor,
 )
-from synth.al.names import KEYWORDS
+from synth.al.names import ARM_NAMES, KEYWORDS
 from synth.al.values import (
     CONSTANTS,
     FORCE,
@@ -144,7 +144,7 @@ __all__ = [
     "run_program",
 ]
 
-HAND_NAMES: tuple[str, ...] = ("BMANIP", "BLUE", "BARM", "BHAND", "BFINGERS")
+HAND_NAMES: tuple[str, ...] = ARM_NAMES
 """The blue arm's names (al-language.md §6): all denote its one hand frame and hand device."""
 
 _FLIP: dict[str, Relation] = {"<": ">", ">": "<", "≤": "≥", "≥": "≤", "=": "=", "≠": "≠"}
@@ -279,6 +279,9 @@ class Interpreter:
         self.machine = machine
         self.max_statements = max_statements
         self.hand_names = tuple(n.upper() for n in hand_names)
+        for name in self.hand_names:
+            if name in CONSTANTS or name in KEYWORDS:
+                raise ValueError(f"{name} is predeclared in AL and cannot name the hand")
         self._global = _Scope(None, "<global>")
         self._hand = _Variable(self.hand_names[0], "FRAME", hand=True)
         for name in self.hand_names:

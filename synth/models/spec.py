@@ -19,13 +19,17 @@ lines.
 from __future__ import annotations
 
 import math
+import re
 from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
 
-from synth.al.names import al_name_problem
+from synth.al.names import NameRole, al_name_problem
 from synth.models.contacts import ContactSpec
 from synth.units import parse_quantity, registry
+
+_FRAME_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_-]*", re.ASCII)
+"""A frame's own name (not its AL name): matched in full, so no trailing newline gets through."""
 
 WORLD = "world"
 """Name of the root frame (the work station / table frame)."""
@@ -63,8 +67,9 @@ class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
 
-def _check_al_name(value: str, *, allow_predeclared: bool = False) -> str:
-    problem = al_name_problem(value, allow_predeclared=allow_predeclared)
+def _check_al_name(value: str, *, role: NameRole = "frame") -> str:
+    """``value`` upper-cased if it may name a ``role`` in AL (:func:`al_name_problem`)."""
+    problem = al_name_problem(value, role=role)
     if problem:
         raise ValueError(problem)
     return value.upper()
@@ -375,8 +380,11 @@ class FrameSpec(_Model):
     @field_validator("name")
     @classmethod
     def _name(cls, v: str) -> str:
-        if not v or not v.replace("_", "a").replace("-", "a").isalnum() or not v[0].isalpha():
-            raise ValueError("a frame name is a letter followed by letters, digits, '_' or '-'")
+        if _FRAME_NAME.fullmatch(v) is None:
+            raise ValueError(
+                f"{v!r} is not a frame name: an ASCII letter followed by letters, digits, '_' "
+                "or '-', with no space or control character"
+            )
         if v == WORLD:
             raise ValueError("'world' is the root frame and cannot be redefined")
         return v
@@ -497,7 +505,10 @@ class HandSpec(_Model):
 
 
 class ParkSpec(_Model):
-    """The arm's park frame (e.g. ``BPARK``), in world coordinates."""
+    """The arm's park frame (e.g. ``BPARK``), in world coordinates.
+
+    ``al_name`` is any AL name a frame may take, or ``BPARK`` (:func:`al_name_problem`).
+    """
 
     al_name: str = "BPARK"
     pose: Pose
@@ -505,11 +516,15 @@ class ParkSpec(_Model):
     @field_validator("al_name")
     @classmethod
     def _al(cls, v: str) -> str:
-        return _check_al_name(v, allow_predeclared=True)
+        return _check_al_name(v, role="park")
 
 
 class ManipulatorSpec(_Model):
-    """The manipulator: arm model, hand, park frame and hand positioning errors."""
+    """The manipulator: arm model, hand, park frame and hand positioning errors.
+
+    ``al_name`` is any AL name a frame may take, or one of the blue arm's names (``BMANIP``,
+    ``BLUE``, ``BARM``, ``BHAND``, ``BFINGERS``), never a constant such as ``TRUE``.
+    """
 
     al_name: str = "BMANIP"
     arm: ArmSpec
@@ -520,7 +535,7 @@ class ManipulatorSpec(_Model):
     @field_validator("al_name")
     @classmethod
     def _al(cls, v: str) -> str:
-        return _check_al_name(v, allow_predeclared=True)
+        return _check_al_name(v, role="arm")
 
 
 class ProofSpec(_Model):
