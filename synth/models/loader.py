@@ -83,6 +83,16 @@ def check_task(spec: TaskSpec, lines: dict[PathKey, int] | None = None) -> None:
             if name in al_names:
                 fail(loc, f"AL name {name!r} is already used by a frame")
             al_names[name] = loc
+    # A reference (insertion.pin, --from) may be a frame name or an AL name; one spelling must
+    # never mean two frames (AL names fold case, so the comparison does too).
+    for i, f in enumerate(spec.frames):
+        owner = al_names.get(f.name.upper())
+        if owner is not None and owner != ("frames", i, "al_name"):
+            fail(
+                ("frames", i, "name"),
+                f"frame name {f.name!r} is the AL name of {format_path(owner)}; "
+                "a name may not refer to two frames",
+            )
 
     for i, f in enumerate(spec.frames):
         if f.parent != WORLD and f.parent not in index:
