@@ -19,7 +19,9 @@ from scipy.optimize import linprog
 
 from synth.exceptions import SpecError
 from synth.models.features import check_contacts
+from synth.models.graph import AttributeGraph
 from synth.models.jamming import fit_problem
+from synth.models.meshes import hole_problem
 from synth.models.spec import PARAMS, WORLD, FrameSpec, InsertionSpec, TaskSpec, Uncertainty
 
 PathKey = tuple[str | int, ...]
@@ -117,6 +119,7 @@ def check_task(spec: TaskSpec, lines: dict[PathKey, int] | None = None) -> None:
                     fail(("frames", i, "shape", "surface"), f"{f.shape.surface!r} is not a surface")
         if f.uncertainty is not None:
             _check_feasible(f.uncertainty, ("frames", i, "uncertainty"), fail)
+    _check_holes_fit(spec, fail)
     if spec.manipulator is not None and spec.manipulator.hand_error is not None:
         _check_feasible(spec.manipulator.hand_error, ("manipulator", "hand_error"), fail)
 
@@ -135,6 +138,38 @@ def check_task(spec: TaskSpec, lines: dict[PathKey, int] | None = None) -> None:
         _check_fit(ins, by_any, fail)
 
     check_contacts(spec, fail)  # contacts section: features exist, pairs and parents make sense
+
+
+def _check_holes_fit(spec: TaskSpec, fail: Any) -> None:
+    """Fail if a hole drilled into a box's top face does not fit on that face.
+
+    The replay drills it with :func:`synth.models.meshes.box_with_holes`; its rule
+    (:func:`~synth.models.meshes.hole_problem`: the mouth, of radius diameter/2 +
+    chamfer_width, strictly inside the face) is checked here at the nominal pose. Holes
+    elsewhere are left to the workcell, which names them.
+    """
+    graph = AttributeGraph(spec)
+    for i, f in enumerate(spec.frames):
+        shape = f.shape
+        if shape is None or shape.type != "hole":
+            continue
+        owner = graph.owner(f.name)
+        box = graph.nodes[owner].shape if owner != WORLD else None
+        if box is None or box.type != "box":
+            continue
+        local = graph.relative(owner, f.name)
+        x, y, z = (float(v) for v in local.translation)
+        if local.rotation[2, 2] < 1.0 - _ON_FACE or abs(z - box.size[2]) > _ON_FACE:
+            continue
+        hole = (x, y, shape.diameter, shape.depth, shape.chamfer_width)
+        problem = hole_problem(box.size, hole)
+        if problem is not None:
+            fail(("frames", i, "shape"), f"hole {f.name!r} does not fit box {owner!r}: {problem}")
+
+
+_ON_FACE = 1e-6
+"""[m], [rad]: how exactly a hole must sit on its box's top face to be checked against it (the
+workcell's placement tolerance)."""
 
 
 def _check_fit(ins: InsertionSpec, frames: dict[str, FrameSpec], fail: Any) -> None:
