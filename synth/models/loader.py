@@ -119,7 +119,6 @@ def check_task(spec: TaskSpec, lines: dict[PathKey, int] | None = None) -> None:
                     fail(("frames", i, "shape", "surface"), f"{f.shape.surface!r} is not a surface")
         if f.uncertainty is not None:
             _check_feasible(f.uncertainty, ("frames", i, "uncertainty"), fail)
-    _check_holes_fit(spec, fail)
     if spec.manipulator is not None and spec.manipulator.hand_error is not None:
         _check_feasible(spec.manipulator.hand_error, ("manipulator", "hand_error"), fail)
 
@@ -138,6 +137,7 @@ def check_task(spec: TaskSpec, lines: dict[PathKey, int] | None = None) -> None:
         _check_fit(ins, by_any, fail)
 
     check_contacts(spec, fail)  # contacts section: features exist, pairs and parents make sense
+    _check_holes_fit(spec, fail)
 
 
 def _check_holes_fit(spec: TaskSpec, fail: Any) -> None:
@@ -158,7 +158,7 @@ def _check_holes_fit(spec: TaskSpec, fail: Any) -> None:
         if box is None or box.type != "box":
             continue
         local = graph.relative(owner, f.name)
-        x, y, z = (float(v) for v in local.translation)
+        x, y, z = (round(float(v), 12) for v in local.translation)  # as the workcell does
         if local.rotation[2, 2] < 1.0 - _ON_FACE or abs(z - box.size[2]) > _ON_FACE:
             continue
         hole = (x, y, shape.diameter, shape.depth, shape.chamfer_width)
