@@ -6,6 +6,7 @@ Everything inside synth is SI (m, rad, s, N, kg). One pint registry serves the w
 from __future__ import annotations
 
 import math
+import re
 from functools import cache
 from typing import Any, Literal
 
@@ -42,13 +43,116 @@ def _dimensionality(dim: Dimension) -> pint.util.UnitsContainer:
     return ureg.Quantity(1, _SI_UNIT[dim]).dimensionality
 
 
+_NUMBER = r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
+_UNIT_NAME = r"[A-Za-z_][A-Za-z0-9_]*(?:(?:\^|\*\*)[+-]?[0-9])?"
+_UNIT = rf"{_UNIT_NAME}(?: *[*/] *{_UNIT_NAME})*"
+QUANTITY = re.compile(rf"(?P<number>{_NUMBER})(?: *(?P<unit>{_UNIT}))?", re.ASCII)
+"""``<number> [<unit>]``, matched in full after stripping outer white space: a decimal number
+(``3.85``, ``-.5``, ``1e-3``) and a unit made of unit names joined by ``*`` or ``/``, each with
+an optional one-digit power (``cm``, ``in``, ``rad/s``, ``m/s^2``, ``N*m``, ``cm/deg``). No
+parentheses, no operators between numbers, no second number: pint never evaluates an
+expression such as ``9**9**9 cm``."""
+
+MAX_MAGNITUDE: dict[Dimension, float] = {
+    "length": 1.0e3,
+    "angle": 2.0 * math.pi,
+    "force": 1.0e6,
+    "mass": 1.0e4,
+    "time": 1.0e6,
+    "torque": 1.0e6,
+    "dimensionless": 1.0e6,
+}
+"""Largest magnitude a task quantity may have once converted to SI: 1 km, one turn (360°),
+1 MN, 10 t, ~11.6 days, 1 MN·m, 10⁶. A workcell is metres across, so anything past these is a
+typing slip (``1e300 lightyear``), and the limits keep every product the planner forms
+(squares of lengths, sums of error chains) far from overflow."""
+
+
+def read_quantity(text: object) -> Any:
+    """``text`` as a pint quantity, if it is ``<number> [<unit>]`` (:data:`QUANTITY`).
+
+    The number must be finite as written (``1e999`` is not). Raises :class:`UnitError` for
+    anything else; the caller checks the dimension and the converted value
+    (:func:`si_magnitude`).
+    """
+    if isinstance(text, bool) or not isinstance(text, str | int | float):
+        raise UnitError(f"expected a quantity string like '3.85 cm', got {text!r}")
+    if isinstance(text, int | float):
+        text = repr(float(text)) if isinstance(text, float) else str(text)
+    match = QUANTITY.fullmatch(text.strip())
+    if match is None:
+        raise UnitError(
+            f"cannot read {text!r} as a quantity: write a number and a unit, e.g. '3.85 cm', "
+            "'2 rad/s' or '8 rad/s^2' (no expressions)"
+        )
+    number = float(match["number"])
+    if not math.isfinite(number):
+        raise UnitError(f"{text!r} is not a finite number")
+    unit = match["unit"] or "dimensionless"
+    try:
+        return registry().Quantity(number, unit)
+    except Exception as exc:  # pint raises several unrelated types for unknown units
+        raise UnitError(f"cannot read {text!r} as a quantity: {exc}") from None
+
+
+def si_magnitude(q: Any, unit: str, text: object, dim: Dimension | None = None) -> float:
+    """The magnitude of ``q`` in ``unit``, checked finite *after* the conversion.
+
+    With ``dim``, also ``|value| ≤`` :data:`MAX_MAGNITUDE` ``[dim]``. ``text`` is the input as
+    written, for the message.
+    """
+    value = float(q.to(unit).magnitude) if unit else float(q.to("dimensionless").magnitude)
+    if not math.isfinite(value):
+        raise UnitError(f"{text!r} is not finite in SI units ({unit or 'dimensionless'})")
+    if dim is not None and abs(value) > MAX_MAGNITUDE[dim]:
+        limit = MAX_MAGNITUDE[dim]
+        shown = format_quantity(limit, dim, _DISPLAY[dim]) if dim != "dimensionless" else limit
+        raise UnitError(f"{text!r} is out of range: a task {dim} is at most {shown} in magnitude")
+    return value
+
+
+RATE_RANGE: tuple[float, float] = (1.0e-3, 1.0e6)
+"""[SI] the range of a joint's velocity, acceleration or jerk limit (rad or m per s, s², s³).
+Below 1e-3 a joint needs over 50 min for half a turn at that velocity (π / 1e-3 s) and is no
+arm a task can plan for; at a jerk of 1e-300 the trajectory generator (Ruckig) fails outright.
+Above 1e6 no arm moves, and the limits are that unrealistic only by a slip."""
+
+
+def rate_si(
+    text: object, order: int, kind: Literal["revolute", "prismatic"] | None = None
+) -> float:
+    """SI value of a joint rate limit: ``order`` 1 velocity, 2 acceleration, 3 jerk.
+
+    A revolute joint's rate is angular (``2 rad/s``, ``90 deg/s``), a prismatic joint's linear
+    (``50 cm/s``, ``2 m/s^2``); without ``kind`` either is accepted. The SI value must lie in
+    :data:`RATE_RANGE`.
+    """
+    q = read_quantity(text)
+    ureg = registry()
+    power = "" if order == 1 else f"^{order}"
+    angular = (ureg.second**-order).dimensionality
+    linear = (ureg.meter * ureg.second**-order).dimensionality
+    allowed = {"revolute": (angular,), "prismatic": (linear,), None: (angular, linear)}[kind]
+    if q.dimensionality not in allowed:
+        what = {"revolute": f"rad/s{power}", "prismatic": f"m/s{power}"}
+        wanted = what[kind] if kind is not None else f"rad/s{power} or m/s{power}"
+        raise UnitError(f"{text!r} is not a rate per s{power} ({wanted})")
+    unit = ("rad" if q.dimensionality == angular else "m") + f"/s{power}"
+    value = si_magnitude(q, unit, text)
+    lo, hi = RATE_RANGE
+    if not lo <= value <= hi:
+        raise UnitError(f"{text!r} must lie between {lo:g} and {hi:g} {unit}")
+    return value
+
+
 def parse_quantity(text: object, dim: Dimension) -> float:
     """Parse a quantity with an explicit unit and return its SI value.
 
     ``dim`` is the expected dimension. A bare number is rejected unless ``dim`` is
     ``"dimensionless"``: every dimensioned number in a task carries its unit. For forces, mass
     units (``8 oz``) are accepted as the weight they exert (standard gravity), the way AL
-    programs write force thresholds.
+    programs write force thresholds. The text must be ``<number> <unit>`` (:data:`QUANTITY`),
+    and the SI value finite and within :data:`MAX_MAGNITUDE`.
     """
     if isinstance(text, bool) or text is None:
         raise UnitError(f"expected a quantity with a unit of {dim}, got {text!r}")
@@ -57,6 +161,8 @@ def parse_quantity(text: object, dim: Dimension) -> float:
             value = float(text)
             if not math.isfinite(value):
                 raise UnitError(f"{text!r} is not a finite number")
+            if abs(value) > MAX_MAGNITUDE[dim]:
+                raise UnitError(f"{text!r} is out of range (at most {MAX_MAGNITUDE[dim]:g})")
             return value
         raise UnitError(
             f"{text!r} has no unit; write it with a unit of {dim}, e.g. '{text} {_example(dim)}'"
@@ -64,15 +170,7 @@ def parse_quantity(text: object, dim: Dimension) -> float:
     if not isinstance(text, str):
         raise UnitError(f"expected a quantity string like '3.85 cm', got {type(text).__name__}")
     ureg = registry()
-    try:
-        q: Any = ureg.Quantity(text.strip())
-    except Exception as exc:  # pint raises several unrelated types for bad text
-        raise UnitError(f"cannot read {text!r} as a quantity: {exc}") from None
-    if not isinstance(q, pint.Quantity):
-        q = ureg.Quantity(q)
-    magnitude = float(q.magnitude)
-    if not math.isfinite(magnitude):
-        raise UnitError(f"{text!r} is not a finite number")
+    q = read_quantity(text)
     if q.unitless and dim != "dimensionless":
         raise UnitError(
             f"{text!r} has no unit; write it with a unit of {dim}, "
@@ -83,9 +181,18 @@ def parse_quantity(text: object, dim: Dimension) -> float:
     target = _dimensionality(dim)
     if q.dimensionality != target:
         raise UnitError(f"{text!r} is not a {dim} (its dimension is {q.dimensionality})")
-    if dim == "dimensionless":
-        return float(q.to("dimensionless").magnitude)
-    return float(q.to(_SI_UNIT[dim]).magnitude)
+    return si_magnitude(q, _SI_UNIT[dim], text, dim)
+
+
+_DISPLAY: dict[Dimension, str] = {
+    "length": "m",
+    "angle": "deg",
+    "force": "N",
+    "mass": "kg",
+    "time": "s",
+    "torque": "N*m",
+    "dimensionless": "",
+}
 
 
 def _example(dim: Dimension) -> str:

@@ -16,9 +16,7 @@ from synth.exceptions import CodegenError
 
 def wp(what: str, base: str, z_cm: float) -> Waypoint:
     xf = pin.SE3(np.eye(3), np.array([0.0, 0.0, z_cm / 100.0]))
-    return Waypoint(
-        L.name(what, field="w", allow_predeclared=True), L.name(base, field="b"), xf, "t"
-    )
+    return Waypoint(L.name(what, field="w", role="arm"), L.name(base, field="b"), xf, "t")
 
 
 GUARD = Guard(L.name("PIN1", field="g"), L.force(2.224), L.string("EXPECTED A FORCE HERE"))

@@ -17,7 +17,9 @@ locations. :func:`bind_world` turns an :class:`~synth.models.graph.AttributeGrap
 
 :func:`preamble` prints the same binding as AL text. Our parser reads it, and running it in an
 interpreter gives the same frames and affixments as :meth:`WorldBinding.apply`. It is what
-``synth replay --preamble`` shows.
+``synth replay --preamble`` shows and ``synth plan --preamble`` puts before the program; such a
+program replays on the bound world, since a top-level declaration of a bound frame adopts it
+(:mod:`synth.al.interpreter`).
 """
 
 from __future__ import annotations

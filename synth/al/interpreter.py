@@ -10,17 +10,18 @@ visits its children explicitly, because loops, branches and monitors decide what
 
 Semantics, with the seed's lines (S:n) and seed-al-subset.md sections:
 
-**Names and scopes.** A block's declarations, wherever they appear in it, are made when the
-block is entered (al-language.md §3). A block's names are released when it ends. Its frames
-leave the affixment graph: their links are cut, and frames affixed to them keep their values
-(S:245). A program's top-level statements run in the *global* scope, which also holds the world
-binding (:mod:`synth.al.binding`). Assigning a name that is declared nowhere declares it
+**Names and scopes.** A block's declarations, wherever they appear in it, are made when the block is
+entered (al-language.md §3). A block's names are released when it ends. Its frames leave the
+affixment graph: their links are cut, and frames affixed to them keep their values (S:245). A
+program's top-level statements run in the *global* scope, which also holds the world binding
+(:mod:`synth.al.binding`). A top-level declaration of a frame the binding holds, with the binding's
+type, adopts that frame once (a stand-alone program declares the task's frames itself, ``synth plan
+--preamble``); declaring it again is an error. Assigning a name that is declared nowhere declares it
 implicitly in the global scope, typed by its first value: generated programs never declare
-``DISTANCE_OFF``, ``CORR`` or ``PIN1`` (S:2737, S:2827). Reading a name with no value is an
-error. No value defaults to 0: a referee should not invent one. Predeclared names (units,
-``XHAT``, ``NILROTN``, ``TRUE``, ...) are read-only. So are the arm's hand names (``BLUE``,
-``BMANIP``, ``BARM``, ``BHAND``, ``BFINGERS``: one frame, the sensed hand, moved only by
-``MOVE``).
+``DISTANCE_OFF``, ``CORR`` or ``PIN1`` (S:2737, S:2827). Reading a name with no value is an error.
+No value defaults to 0: a referee should not invent one. Predeclared names (units, ``XHAT``,
+``NILROTN``, ``TRUE``, ...) are read-only. So are the arm's hand names (``BLUE``, ``BMANIP``,
+``BARM``, ``BHAND``, ``BFINGERS``: one frame, the sensed hand, moved only by ``MOVE``).
 
 **Affixment** (S:1160–1200, S:1466–1480; seed-al-subset.md §4). Each frame has at most one
 parent. ``AFFIX A TO B AT T`` sets A ← B*T now and whenever B changes. Without ``AT``, T is the
@@ -120,7 +121,7 @@ from synth.al.machine import (
     TorqueConstraint,
     TorqueMonitor,
 )
-from synth.al.names import KEYWORDS
+from synth.al.names import ARM_NAMES, KEYWORDS
 from synth.al.values import (
     CONSTANTS,
     FORCE,
@@ -166,7 +167,7 @@ MAX_WALL_TIME = 20.0
 """[s] real time one run may take."""
 
 
-HAND_NAMES: tuple[str, ...] = ("BMANIP", "BLUE", "BARM", "BHAND", "BFINGERS")
+HAND_NAMES: tuple[str, ...] = ARM_NAMES
 """The blue arm's names (al-language.md §6): all denote its one hand frame and hand device."""
 
 _FLIP: dict[str, Relation] = {"<": ">", ">": "<", "≤": "≥", "≥": "≤", "=": "=", "≠": "≠"}
@@ -235,6 +236,8 @@ class _Variable:
     type: str
     value: Value | None = None
     hand: bool = False
+    bound: bool = False
+    """Defined by the world binding and not yet declared by the program itself."""
     link: _Link | None = None
     children: list[_Variable] = field(default_factory=list)
 
@@ -308,6 +311,9 @@ class Interpreter:
         self._time_limit = math.inf  # [s] simulated clock at which the run is over budget
         self._wall_limit = math.inf  # [s] time.monotonic() at which it is
         self.hand_names = tuple(n.upper() for n in hand_names)
+        for name in self.hand_names:
+            if name in CONSTANTS or name in KEYWORDS:
+                raise ValueError(f"{name} is predeclared in AL and cannot name the hand")
         self._global = _Scope(None, "<global>")
         self._hand = _Variable(self.hand_names[0], "FRAME", hand=True)
         for name in self.hand_names:
@@ -328,7 +334,7 @@ class Interpreter:
         self._check_declarable(upper, None)
         if upper in self._global.variables:
             raise ValueError(f"{upper} is already bound")
-        variable = _Variable(upper, kind)
+        variable = _Variable(upper, kind, bound=True)
         self._global.variables[upper] = variable
         self._set_pose(variable, pose, None)
 
@@ -485,7 +491,17 @@ class Interpreter:
     def _declare(self, s: ast.Declaration, scope: _Scope) -> None:
         for name in s.names:
             self._check_declarable(name.name, name)
-            if name.name in scope.variables:
+            existing = scope.variables.get(name.name)
+            if existing is not None and existing.bound:
+                # A stand-alone program (``synth plan --preamble``) declares the task's frames
+                # itself: the same name with the same type is the binding's frame, adopted once.
+                if existing.type != s.type:
+                    raise self._error(
+                        name, f"{name.name} is the task's {existing.type}; it cannot be a {s.type}"
+                    )
+                existing.bound = False
+                continue
+            if existing is not None:
                 raise self._error(name, f"{name.name} is declared twice in this block")
             variable = _Variable(name.name, s.type)
             if s.type == "EVENT":

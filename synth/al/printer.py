@@ -26,7 +26,7 @@ from synth.al.parser import grammar_keywords
 __all__ = ["format_expression", "format_program", "format_statement"]
 
 INDENT = "  "
-_IDENTIFIER = re.compile(r"^[A-Z][A-Z0-9_]*$")
+_IDENTIFIER = re.compile(r"[A-Z][A-Z0-9_]*", re.ASCII)
 _CONSTRUCTORS = frozenset({"FRAME", "VECTOR", "ROT", "TRANS"})
 
 # Binding strength; a child printed where a stronger one is required gets parentheses.
@@ -56,7 +56,7 @@ def format_expression(expression: ast.Expr) -> str:
 
 def _name(name: ast.Name, *, callee: bool = False) -> str:
     text = name.name
-    if not _IDENTIFIER.match(text):
+    if _IDENTIFIER.fullmatch(text) is None:
         raise ValueError(f"{name.spelling!r} is not an AL identifier")
     if text in grammar_keywords() and not (callee and text in _CONSTRUCTORS):
         raise ValueError(f"{text!r} is an AL keyword and cannot be printed as a name")

@@ -32,7 +32,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from synth.al.names import al_name_problem
+from synth.al.names import NameRole, al_name_problem
 from synth.al.values import CM, OZ
 from synth.exceptions import CodegenError
 
@@ -149,12 +149,12 @@ def dimensionless(value: float, *, field: str = "number") -> Fragment:
     return Fragment(decimal(value, field=field))
 
 
-def name(value: str, *, field: str, allow_predeclared: bool = False) -> Fragment:
+def name(value: str, *, field: str, role: NameRole = "frame") -> Fragment:
     """A validated AL identifier, upper-case (AL folds case); CodegenError names ``field``.
 
-    ``allow_predeclared`` admits the predeclared arm and park names (``BMANIP``, ``BHAND``).
+    ``role="arm"`` admits the blue arm's predeclared names (``BMANIP``, ``BHAND``).
     """
-    problem = al_name_problem(value, allow_predeclared=allow_predeclared)
+    problem = al_name_problem(value, role=role)
     if problem is not None:
         raise CodegenError(field, f"{value!r} cannot be written in AL: {problem}")
     return Fragment(value.upper())

@@ -234,7 +234,7 @@ class _Names:
 
     def hand(self, value: str, field: str) -> Fragment:
         """One of the arm's names (``BMANIP``, ``BHAND``)."""
-        fragment = L.name(value, field=field, allow_predeclared=True)
+        fragment = L.name(value, field=field, role="arm")
         if fragment.text not in self.hands:
             known = ", ".join(sorted(self.hands))
             raise CodegenError(field, f"{value!r} is not a name of the arm ({known})")

@@ -42,7 +42,7 @@ CONTACT_PREDICATE = "contacts"
 ContactKind = Literal["inside_of", "extent_irrelevant"]
 CONTACT_KINDS: tuple[str, ...] = ("inside_of", "extent_irrelevant")
 
-_REF = re.compile(r"^[A-Za-z][A-Za-z0-9_-]*(\.[A-Za-z][A-Za-z0-9_]*)?$")
+_REF = re.compile(r"[A-Za-z][A-Za-z0-9_-]*(\.[A-Za-z][A-Za-z0-9_]*)?", re.ASCII)
 
 
 class ContactSpec(BaseModel):
@@ -67,7 +67,7 @@ class ContactSpec(BaseModel):
     @field_validator("a", "b")
     @classmethod
     def _ref(cls, v: str) -> str:
-        if not _REF.match(v):
+        if not isinstance(v, str) or _REF.fullmatch(v) is None:
             raise ValueError(
                 f"{v!r} is not a feature: write FRAME.FEATURE (e.g. box.bottom) or a surface frame"
             )

@@ -17,7 +17,9 @@ from scipy.optimize import linprog
 
 from synth.exceptions import SpecError
 from synth.models.features import check_contacts
+from synth.models.graph import AttributeGraph
 from synth.models.jamming import fit_problem
+from synth.models.meshes import hole_problem
 from synth.models.spec import PARAMS, WORLD, FrameSpec, InsertionSpec, TaskSpec, Uncertainty
 from synth.models.yamlread import DEFAULT_LIMITS, PathKey, YamlLimits, read_yaml
 
@@ -94,6 +96,16 @@ def check_task(spec: TaskSpec, lines: dict[PathKey, int] | None = None) -> None:
             if name in al_names:
                 fail(loc, f"AL name {name!r} is already used by a frame")
             al_names[name] = loc
+    # A reference (insertion.pin, --from) may be a frame name or an AL name; one spelling must
+    # never mean two frames (AL names fold case, so the comparison does too).
+    for i, f in enumerate(spec.frames):
+        owner = al_names.get(f.name.upper())
+        if owner is not None and owner != ("frames", i, "al_name"):
+            fail(
+                ("frames", i, "name"),
+                f"frame name {f.name!r} is the AL name of {format_path(owner)}; "
+                "a name may not refer to two frames",
+            )
 
     for i, f in enumerate(spec.frames):
         if f.parent != WORLD and f.parent not in index:
@@ -135,6 +147,39 @@ def check_task(spec: TaskSpec, lines: dict[PathKey, int] | None = None) -> None:
         _check_fit(ins, by_any, fail, where)
 
     check_contacts(spec, fail)  # contacts section: features exist, pairs and parents make sense
+    _check_holes_fit(spec, fail)
+
+
+def _check_holes_fit(spec: TaskSpec, fail: Any) -> None:
+    """Fail if a hole drilled into a box's top face does not fit on that face.
+
+    The replay drills it with :func:`synth.models.meshes.box_with_holes`; its rule
+    (:func:`~synth.models.meshes.hole_problem`: the mouth, of radius diameter/2 +
+    chamfer_width, strictly inside the face) is checked here at the nominal pose. Holes
+    elsewhere are left to the workcell, which names them.
+    """
+    graph = AttributeGraph(spec)
+    for i, f in enumerate(spec.frames):
+        shape = f.shape
+        if shape is None or shape.type != "hole":
+            continue
+        owner = graph.owner(f.name)
+        box = graph.nodes[owner].shape if owner != WORLD else None
+        if box is None or box.type != "box":
+            continue
+        local = graph.relative(owner, f.name)
+        x, y, z = (round(float(v), 12) for v in local.translation)  # as the workcell does
+        if local.rotation[2, 2] < 1.0 - _ON_FACE or abs(z - box.size[2]) > _ON_FACE:
+            continue
+        hole = (x, y, shape.diameter, shape.depth, shape.chamfer_width)
+        problem = hole_problem(box.size, hole)
+        if problem is not None:
+            fail(("frames", i, "shape"), f"hole {f.name!r} does not fit box {owner!r}: {problem}")
+
+
+_ON_FACE = 1e-6
+"""[m], [rad]: how exactly a hole must sit on its box's top face to be checked against it (the
+workcell's placement tolerance)."""
 
 
 def _insertion_locations(spec: TaskSpec) -> list[tuple[PathKey, InsertionSpec]]:

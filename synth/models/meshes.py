@@ -35,6 +35,7 @@ __all__ = [
     "Hole",
     "block",
     "box_with_holes",
+    "hole_problem",
     "inscribed_area_ratio",
     "pin",
 ]
@@ -150,30 +151,41 @@ def _segments(segments: int) -> int:
     return segments
 
 
-def _hole(size: tuple[float, float, float], i: int, hole: Sequence[float]) -> Hole:
+def hole_problem(size: tuple[float, float, float], hole: Sequence[float]) -> str | None:
+    """Why ``hole`` (x, y, diameter, depth, chamfer_width) [m] cannot be drilled, or None.
+
+    The rule :func:`box_with_holes` enforces: finite numbers, diameter and depth > 0, chamfer
+    ≥ 0 and shallower than the hole (a 45° chamfer of width w is w deep), and the mouth, of
+    radius diameter/2 + w, strictly inside the ``size`` box's top face.
+    """
     values = tuple(float(v) for v in hole)
     if len(values) != 5 or not all(math.isfinite(v) for v in values):
-        raise ValueError(
-            f"holes[{i}] must be five finite numbers (x, y, diameter, depth, chamfer_width) [m], "
-            f"got {hole!r}"
+        return (
+            f"must be five finite numbers (x, y, diameter, depth, chamfer_width) [m], got {hole!r}"
         )
     x, y, diameter, depth, chamfer = values
     if diameter <= 0.0 or depth <= 0.0 or chamfer < 0.0:
-        raise ValueError(
-            f"holes[{i}]: diameter and depth must be > 0 and chamfer_width ≥ 0 [m], got {hole!r}"
-        )
+        return f"diameter and depth must be > 0 and chamfer_width ≥ 0 [m], got {hole!r}"
     if chamfer >= depth:
-        raise ValueError(
-            f"holes[{i}]: a 45° chamfer of width {chamfer!r} needs a hole deeper than that, "
-            f"got depth {depth!r}"
+        return (
+            f"a 45° chamfer of width {chamfer!r} needs a hole deeper than that, got depth {depth!r}"
         )
     mouth = diameter / 2.0 + chamfer
     sx, sy, _ = size
     if abs(x) + mouth >= sx / 2.0 or abs(y) + mouth >= sy / 2.0:
-        raise ValueError(
-            f"holes[{i}]: the mouth (radius {mouth!r} m at ({x!r}, {y!r})) must lie strictly "
-            f"inside the {sx!r} × {sy!r} m top face"
+        return (
+            f"the mouth (radius {mouth:.4g} m at ({x:.4g}, {y:.4g})) must lie strictly "
+            f"inside the {sx:.4g} × {sy:.4g} m top face"
         )
+    return None
+
+
+def _hole(size: tuple[float, float, float], i: int, hole: Sequence[float]) -> Hole:
+    problem = hole_problem(size, hole)
+    if problem is not None:
+        separator = " " if problem.startswith("must") else ": "
+        raise ValueError(f"holes[{i}]{separator}{problem}")
+    x, y, diameter, depth, chamfer = (float(v) for v in hole)
     return x, y, diameter, depth, chamfer
 
 

@@ -19,14 +19,18 @@ lines.
 from __future__ import annotations
 
 import math
+import re
 from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
 
-from synth.al.names import al_name_problem
+from synth.al.names import NameRole, al_name_problem
 from synth.models.catalog import ARM_MODELS
 from synth.models.contacts import ContactSpec
-from synth.units import parse_quantity, registry
+from synth.units import parse_quantity, rate_si, read_quantity, registry, si_magnitude
+
+_FRAME_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_-]*", re.ASCII)
+"""A frame's own name (not its AL name): matched in full, so no trailing newline gets through."""
 
 WORLD = "world"
 """Name of the root frame (the work station / table frame)."""
@@ -64,8 +68,9 @@ class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
 
-def _check_al_name(value: str, *, allow_predeclared: bool = False) -> str:
-    problem = al_name_problem(value, allow_predeclared=allow_predeclared)
+def _check_al_name(value: str, *, role: NameRole = "frame") -> str:
+    """``value`` upper-cased if it may name a ``role`` in AL (:func:`al_name_problem`)."""
+    problem = al_name_problem(value, role=role)
     if problem:
         raise ValueError(problem)
     return value.upper()
@@ -114,11 +119,22 @@ def _bound(kind: Literal["length", "angle"]) -> Any:
                 raise ValueError(f"min {v[0]!r} exceeds max {v[1]!r}")
             if lo > 0 or hi < 0:
                 raise ValueError("the nominal value (0) must lie inside [min, max]")
+            if kind == "angle" and max(-lo, hi) > math.pi:
+                raise ValueError(
+                    f"rotation error {v!r} exceeds 180°: ±180° already allows every orientation, "
+                    "and the first-order error model needs a bounded rotation"
+                )
             return {"lo": lo, "hi": hi}
         tol = parse_quantity(v, kind)
         if tol < 0:
             raise ValueError(f"tolerance {v!r} is negative; write the half-width, e.g. '0.3 in'")
-        return {"lo": -tol, "hi": tol}
+        lo, hi = -tol, tol
+        if kind == "angle" and max(-lo, hi) > math.pi:
+            raise ValueError(
+                f"rotation error {v!r} exceeds 180°: ±180° already allows every orientation, "
+                "and the first-order error model needs a bounded rotation"
+            )
+        return {"lo": lo, "hi": hi}
 
     return BeforeValidator(parse)
 
@@ -178,10 +194,7 @@ class LinearConstraint(_Model):
 def _constraint_kind(data: dict[str, Any]) -> Literal["length", "angle"]:
     bound = data.get("max") if data.get("max") is not None else data.get("min")
     ureg = registry()
-    try:
-        q: Any = ureg.Quantity(str(bound))
-    except Exception:
-        raise ValueError(f"cannot read constraint bound {bound!r} as a quantity") from None
+    q = read_quantity(bound)
     if q.unitless:
         raise ValueError(f"constraint bound {bound!r} has no unit")
     if q.dimensionality == ureg.meter.dimensionality:
@@ -207,20 +220,14 @@ def _coefficient_si(param: str, coefficient: Any, kind: Literal["length", "angle
                 f"a unit, e.g. '1 cm/deg'"
             )
         return value
-    try:
-        q: Any = ureg.Quantity(str(coefficient))
-    except Exception:
-        raise ValueError(f"cannot read coefficient {coefficient!r} of {param}") from None
-    value = float(q.to_base_units().magnitude)
-    if not math.isfinite(value):
-        raise ValueError(f"coefficient of {param} is not finite")
+    q = read_quantity(coefficient)
     length_dim = ureg.meter.dimensionality
     if param_kind == kind and q.dimensionality == ureg.dimensionless.dimensionality:
-        return float(q.to("dimensionless").magnitude)
+        return si_magnitude(q, "", coefficient)
     if param_kind == "angle" and kind == "length" and q.dimensionality == length_dim:
-        return float(q.to("m/rad").magnitude)
+        return si_magnitude(q, "m/rad", coefficient)
     if param_kind == "length" and kind == "angle" and q.dimensionality == 1 / length_dim:
-        return float(q.to("rad/m").magnitude)
+        return si_magnitude(q, "rad/m", coefficient)
     raise ValueError(
         f"coefficient {coefficient!r} of {param} does not turn a {param_kind} into a {kind}"
     )
@@ -317,6 +324,16 @@ class HoleShape(_Model):
     chamfer_width: NonNegativeLength = 0.0
     surface: str
 
+    @model_validator(mode="after")
+    def _chamfer_fits(self) -> HoleShape:
+        # A 45° chamfer of radial width w is w deep: it must end above the hole's bottom.
+        if self.chamfer_width >= self.depth:
+            raise ValueError(
+                f"chamfer_width {self.chamfer_width:.4g} m is not shallower than the hole "
+                f"(depth {self.depth:.4g} m): a 45° chamfer of width w is w deep"
+            )
+        return self
+
 
 class SurfaceShape(_Model):
     """A planar face; the outline polygon lies in the frame's xy plane (z = outward normal).
@@ -376,8 +393,11 @@ class FrameSpec(_Model):
     @field_validator("name")
     @classmethod
     def _name(cls, v: str) -> str:
-        if not v or not v.replace("_", "a").replace("-", "a").isalnum() or not v[0].isalpha():
-            raise ValueError("a frame name is a letter followed by letters, digits, '_' or '-'")
+        if _FRAME_NAME.fullmatch(v) is None:
+            raise ValueError(
+                f"{v!r} is not a frame name: an ASCII letter followed by letters, digits, '_' "
+                "or '-', with no space or control character"
+            )
         if v == WORLD:
             raise ValueError("'world' is the root frame and cannot be redefined")
         return v
@@ -408,11 +428,23 @@ class InsertionSpec(_Model):
     direction: Literal["parallel", "antiparallel"] = "parallel"
     d_f: NonNegativeLength | None = None
     d_s: NonNegativeLength | None = None
-    dr_ok: NonNegativeLength | None = None
+    dr_ok: Length | None = None
+    """[m] Δr_ok, the lateral error an insertion tolerates (seed L1963); > 0, since the search
+    spaces its rings by it."""
     dtheta_ok: Annotated[float, BeforeValidator(_angle), Field(ge=0)] | None = None
     friction: Annotated[float, Field(ge=0, allow_inf_nan=False)] = DEFAULT_FRICTION
     """[1] pin–hole friction coefficient μ: the planner's wedging limit
     (:mod:`synth.models.jamming`) and the replay's (:mod:`synth.replay.wedging`)."""
+
+    @field_validator("dr_ok")
+    @classmethod
+    def _dr_ok_positive(cls, v: float | None) -> float | None:
+        if v is not None and not v > 0:
+            raise ValueError(
+                f"dr_ok must be > 0 (got {v:g} m): the search spaces its rings by Δr_ok, and "
+                "an insertion that tolerates no lateral error cannot succeed"
+            )
+        return v
 
 
 class SequenceSpec(_Model):
@@ -459,24 +491,11 @@ def _joint_rates(order: int) -> Any:
             return None
         if isinstance(v, str) or not isinstance(v, list | tuple):
             raise ValueError("give one rate per joint as a list, e.g. ['2 rad/s', '0.5 m/s']")
-        ureg = registry()
         out = []
         for item in v:
             if isinstance(item, bool) or not isinstance(item, str):
                 raise ValueError(f"{item!r} has no unit; write e.g. '2 rad/s' or '0.5 m/s'")
-            try:
-                q: Any = ureg.Quantity(item.strip())
-            except Exception:
-                raise ValueError(f"cannot read {item!r} as a quantity") from None
-            angular = (ureg.second**-order).dimensionality
-            linear = (ureg.meter * ureg.second**-order).dimensionality
-            if q.dimensionality not in (angular, linear):
-                unit = "s" if order == 1 else f"s^{order}"
-                raise ValueError(f"{item!r} is not a rate per {unit} (rad/{unit} or m/{unit})")
-            value = float(q.to_base_units().magnitude)
-            if not math.isfinite(value) or value <= 0:
-                raise ValueError(f"{item!r} must be positive and finite")
-            out.append(value)
+            out.append(rate_si(item, order))
         return tuple(out)
 
     return BeforeValidator(parse)
@@ -550,7 +569,10 @@ class HandSpec(_Model):
 
 
 class ParkSpec(_Model):
-    """The arm's park frame (e.g. ``BPARK``), in world coordinates."""
+    """The arm's park frame (e.g. ``BPARK``), in world coordinates.
+
+    ``al_name`` is any AL name a frame may take, or ``BPARK`` (:func:`al_name_problem`).
+    """
 
     al_name: str = "BPARK"
     pose: Pose
@@ -558,11 +580,15 @@ class ParkSpec(_Model):
     @field_validator("al_name")
     @classmethod
     def _al(cls, v: str) -> str:
-        return _check_al_name(v, allow_predeclared=True)
+        return _check_al_name(v, role="park")
 
 
 class ManipulatorSpec(_Model):
-    """The manipulator: arm model, hand, park frame and hand positioning errors."""
+    """The manipulator: arm model, hand, park frame and hand positioning errors.
+
+    ``al_name`` is any AL name a frame may take, or one of the blue arm's names (``BMANIP``,
+    ``BLUE``, ``BARM``, ``BHAND``, ``BFINGERS``), never a constant such as ``TRUE``.
+    """
 
     al_name: str = "BMANIP"
     arm: ArmSpec
@@ -573,7 +599,7 @@ class ManipulatorSpec(_Model):
     @field_validator("al_name")
     @classmethod
     def _al(cls, v: str) -> str:
-        return _check_al_name(v, allow_predeclared=True)
+        return _check_al_name(v, role="arm")
 
 
 class ProofSpec(_Model):

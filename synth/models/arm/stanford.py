@@ -41,7 +41,7 @@ from synth.models.arm.hand import hand_bodies, palm_top
 from synth.models.arm.limits import JointKind, JointLimits
 from synth.models.graph import pose_to_se3
 from synth.models.spec import HandSpec, Pose
-from synth.units import parse_quantity
+from synth.units import parse_quantity, rate_si
 
 STANFORD_PARAMETERS_PATH: Path = (
     Path(__file__).resolve().parents[3] / "fixtures" / "arms" / "stanford.yaml"
@@ -105,17 +105,10 @@ def _quantity(entry: Any, dim: str, where: str) -> float:
 
 def _rate(text: Any, kind: JointKind, order: int, where: str) -> float:
     """SI value of a joint rate (order 1: velocity, 2: acceleration, 3: jerk)."""
-    from synth.units import registry
-
-    ureg = registry()
     try:
-        q: Any = ureg.Quantity(str(text))
-        unit = ("rad" if kind == "revolute" else "m") + "/s" + ("" if order == 1 else f"^{order}")
-        return float(q.to(unit).magnitude)
-    except Exception:
-        raise ArmModelError(
-            f"cannot read {text!r} as a {kind} joint rate of order {order}", where
-        ) from None
+        return rate_si(text, order, kind)
+    except SynthError as exc:
+        raise ArmModelError(f"{kind} joint rate of order {order}: {exc.message}", where) from None
 
 
 def load_stanford_parameters(path: Path | str | None = None) -> StanfordParameters:

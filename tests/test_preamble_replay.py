@@ -1,0 +1,93 @@
+"""A stand-alone program (the world binding printed before it) replays like the bare one.
+
+``synth plan --preamble`` writes :func:`synth.al.binding.preamble` before the program; the
+replay binds the same frames from the task. A top-level declaration of a bound frame with its
+type adopts it, so both texts run the same motions: the same outcome and simulated time, and
+the preamble's statements on top of the bare program's count.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from synth.al import ast
+from synth.al.binding import bind_world, preamble
+from synth.al.parser import parse_program
+from synth.models.graph import AttributeGraph
+from synth.models.loader import load_task
+from synth.replay import replay
+
+ROOT = Path(__file__).resolve().parents[1]
+SEED = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
+FIRST_CUT = Path(__file__).parent / "data" / "al" / "seed_4_8_first_cut.al"
+
+
+def top_level(text: str) -> tuple[ast.Stmt, ...]:
+    """The statements of a flat program (no blocks: each runs once)."""
+    program = parse_program(text)
+    assert all(not isinstance(s, ast.Block) for s in program.body)
+    return program.body
+
+
+def test_preamble_before_a_program_replays_like_the_program() -> None:
+    graph = AttributeGraph(load_task(SEED))
+    bare = FIRST_CUT.read_text(encoding="utf-8")
+    head = preamble(graph)
+    alone = replay(bare, SEED)
+    with_head = replay(head + "\n" + bare, SEED)
+    assert alone.nominal.outcome == with_head.nominal.outcome == "success"
+    assert with_head.nominal.time == pytest.approx(alone.nominal.time, abs=1e-9)
+    # Each preamble statement runs once: the declarations, then one assignment or AFFIX a frame.
+    statements = top_level(head)
+    assert with_head.nominal.statements - alone.nominal.statements == len(statements)
+    assigned = [s for s in statements if not isinstance(s, ast.Declaration)]
+    assert len(assigned) == len(bind_world(graph).frames)
+
+
+@pytest.mark.parametrize(
+    ("program", "message"),
+    [
+        ("FRAME BOX, BOX;", "BOX is declared twice"),
+        ("FRAME BOX; BEGIN FRAME RACK; END; FRAME BOX;", "BOX is declared twice"),
+        ("VECTOR BOX;", "BOX is the task's FRAME; it cannot be a VECTOR"),
+    ],
+)
+def test_a_bound_frame_is_adopted_once_and_only_with_its_type(program: str, message: str) -> None:
+    report = replay(program, SEED)
+    assert report.nominal.outcome == "error"
+    assert message in report.nominal.message
+
+
+def test_a_program_may_still_declare_its_own_frames_twice_in_nested_blocks() -> None:
+    # Shadowing in an inner block is a new variable, not the binding's frame.
+    report = replay("BEGIN FRAME BOX; BOX ← FRAME(NILROTN, VECTOR(0,0,1)*CM); END;", SEED)
+    assert report.nominal.outcome != "error", report.nominal.message
+
+
+def test_cli_plan_preamble_output_replays(tmp_path: Path) -> None:
+    # Before: "BOX is declared twice in this block" (exit 2) for every --preamble output.
+    out = tmp_path / "x.al"
+    synth = [sys.executable, "-m", "synth.cli"]
+    args = ["--preamble", "-o", str(out), "--proof-trials", "0", "--workers", "1"]
+    plan = subprocess.run(
+        [*synth, "plan", str(SEED), *args],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=ROOT,
+    )
+    assert plan.returncode == 0, plan.stderr
+    assert out.read_text(encoding="utf-8").startswith("{ World binding of task seed_4_8")
+    again = subprocess.run(
+        [*synth, "replay", str(out), "--task", str(SEED), "--trials", "0", "--workers", "1"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=ROOT,
+    )
+    assert again.returncode == 0, again.stdout + again.stderr
+    assert "nominal: success: PIN1 seated in BH1" in again.stdout

@@ -1,0 +1,236 @@
+"""Task numbers: a number and a unit, never an expression; finite and in range *after* conversion.
+
+Each extreme that used to crash (exit 70) or print nonsense is a spec error naming its field.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+import yaml
+
+from synth.exceptions import SpecError, UnitError
+from synth.models.loader import validate_task
+from synth.units import MAX_MAGNITUDE, RATE_RANGE, parse_quantity, rate_si
+
+ROOT = Path(__file__).resolve().parents[1]
+SEED = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
+CM = 0.01
+INCH = 0.0254
+DEG = math.pi / 180.0
+
+
+def seed() -> dict[str, Any]:
+    data: dict[str, Any] = yaml.safe_load(SEED.read_text(encoding="utf-8"))
+    return copy.deepcopy(data)
+
+
+def frame(data: dict[str, Any], name: str) -> tuple[int, dict[str, Any]]:
+    return next((i, f) for i, f in enumerate(data["frames"]) if f["name"] == name)
+
+
+def refused(data: dict[str, Any]) -> SpecError:
+    with pytest.raises(SpecError) as info:
+        validate_task(data)
+    return info.value
+
+
+# --------------------------------------------------------------------------------------------
+# The grammar: <number> <unit>
+
+
+@pytest.mark.parametrize(
+    ("text", "dim", "si"),
+    [
+        ("2 in", "length", 2 * INCH),
+        ("0.25 deg", "angle", 0.25 * DEG),
+        ("3.85cm", "length", 0.0385),
+        ("-.5 mm", "length", -0.0005),
+        ("1e-3 m", "length", 0.001),
+        ("  7 cm ", "length", 0.07),
+        ("8 oz", "force", 8 * 0.028349523125 * 9.80665),
+    ],
+)
+def test_a_number_and_a_unit_convert_to_si(text: str, dim: Any, si: float) -> None:
+    assert parse_quantity(text, dim) == pytest.approx(si, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("text", "order", "si"),
+    [
+        ("2 rad/s", 1, 2.0),
+        ("90 deg/s", 1, math.pi / 2),
+        ("10 cm/s", 1, 0.1),
+        ("8 rad/s^2", 2, 8.0),
+        ("2 m/s^2", 2, 2.0),
+        ("50 rad/s**3", 3, 50.0),
+    ],
+)
+def test_rates_with_compound_units_convert(text: str, order: int, si: float) -> None:
+    assert rate_si(text, order) == pytest.approx(si, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "9**9**9 cm",  # pint evaluated this (a 370-million-digit integer): a hang
+        "(2+3) cm",
+        "2*3 cm",
+        "2 cm + 1 cm",
+        "2 m**999",
+        "2 cm cm",
+        "nan cm",
+        "inf cm",
+        "cm",
+        "2 cm\n3 cm",
+        "2 ｃｍ",
+        "0x10 cm",
+    ],
+)
+def test_expressions_and_non_numbers_are_refused(text: str) -> None:
+    with pytest.raises(UnitError):
+        parse_quantity(text, "length")
+
+
+def test_finiteness_is_checked_after_conversion() -> None:
+    # 1e300 is a finite float; 1e300 light years = 9.46e315 m overflows to inf (max 1.8e308).
+    with pytest.raises(UnitError, match="not finite in SI units"):
+        parse_quantity("1e300 lightyear", "length")
+    with pytest.raises(UnitError, match="not a finite number"):
+        parse_quantity("1e999 cm", "length")
+
+
+def test_range_is_checked_after_conversion() -> None:
+    # 1e200 cm is finite in m (1e198) but no workcell is that big; 1 km is the limit.
+    assert MAX_MAGNITUDE["length"] == 1e3
+    assert parse_quantity("1000 m", "length") == 1000.0
+    with pytest.raises(UnitError, match="out of range"):
+        parse_quantity("100001 cm", "length")
+    with pytest.raises(UnitError, match="out of range"):
+        parse_quantity("1e200 cm", "length")
+    assert parse_quantity("-360 deg", "angle") == pytest.approx(-2 * math.pi)
+    with pytest.raises(UnitError, match="at most 360 deg"):
+        parse_quantity("361 deg", "angle")
+
+
+# --------------------------------------------------------------------------------------------
+# Spec fields, each refusal naming the field
+
+
+def test_a_huge_length_in_a_pose_names_the_field() -> None:
+    data = seed()
+    i, box = frame(data, "box")
+    box["pose"]["translation"][0] = "1e300 lightyear"
+    assert refused(data).path == f"frames[{i}].pose.translation[0]"
+
+
+@pytest.mark.parametrize("value", ["nan cm", float("nan"), float("inf")])
+def test_a_nan_arm_base_names_the_field(value: object) -> None:
+    data = seed()
+    data["manipulator"]["arm"]["base"]["translation"][0] = value
+    assert refused(data).path == "manipulator.arm.base.translation[0]"
+
+
+def test_rotation_errors_are_at_most_half_a_turn() -> None:
+    # ±180° already admits every orientation; the first-order model (synth.errors.taylor)
+    # has none above it, and used to raise a bare ValueError (exit 70).
+    data = seed()
+    i, box = frame(data, "box")
+    box["uncertainty"]["rz"] = "180 deg"
+    assert validate_task(data).frames[i].uncertainty.rz.hi == pytest.approx(math.pi)  # type: ignore[union-attr]
+    for bad in ("180.01 deg", "200 deg", ["-200 deg", "10 deg"], "4 rad"):
+        box["uncertainty"]["rz"] = bad
+        error = refused(data)
+        assert error.path == f"frames[{i}].uncertainty.rz"
+        assert "180" in error.detail or "360" in error.detail
+
+
+def test_a_chamfer_deeper_than_its_hole_names_the_shape() -> None:
+    data = seed()
+    i, bh1 = frame(data, "bh1")
+    bh1["shape"]["chamfer_width"] = "1.71 cm"  # = depth: a 45° chamfer that deep leaves no bore
+    error = refused(data)
+    assert error.path == f"frames[{i}].shape" and "chamfer_width" in error.detail
+
+
+def test_a_hole_must_fit_its_box_face() -> None:
+    # BH1 sits at x = 3.85 cm on a box 8.90 cm wide (half 4.45); its mouth radius is
+    # 0.32 cm (bore) + the chamfer: 0.27 cm leaves 4.44 < 4.45, 0.29 cm reaches 4.46.
+    data = seed()
+    i, bh1 = frame(data, "bh1")
+    bh1["shape"]["chamfer_width"] = "0.27 cm"
+    validate_task(data)
+    bh1["shape"]["chamfer_width"] = "0.29 cm"
+    error = refused(data)
+    assert error.path == f"frames[{i}].shape" and "strictly inside" in error.detail
+    bh1["shape"]["chamfer_width"] = "0.25 cm"
+    bh1["shape"]["diameter"] = "20 cm"
+    assert refused(data).path == f"frames[{i}].shape"
+
+
+def test_joint_rates_lie_in_their_range() -> None:
+    lo, hi = RATE_RANGE
+    data = seed()
+    arm = data["manipulator"]["arm"]
+    for value, ok in (("1e-300", False), ("0", False), (f"{lo}", True), (f"{hi}", True)):
+        arm["jerk_limits"] = (
+            [f"{value} rad/s^3"] * 2 + [f"{value} m/s^3"] + [f"{value} rad/s^3"] * 3
+        )
+        if ok:
+            validate_task(data)
+        else:
+            error = refused(data)
+            assert error.path == "manipulator.arm.jerk_limits"
+    arm["jerk_limits"] = ["9**9**9 rad/s^3"] * 6
+    assert refused(data).path == "manipulator.arm.jerk_limits"
+
+
+@pytest.mark.parametrize("value", ["0 cm", "-0.1 cm"])
+def test_dr_ok_must_be_positive(value: str) -> None:
+    data = seed()
+    data["insertion"]["dr_ok"] = value
+    error = refused(data)
+    assert error.path == "insertion.dr_ok" and "> 0" in error.detail
+
+
+def test_constraint_coefficients_are_quantities_not_expressions() -> None:
+    data = seed()
+    _, box = frame(data, "box")
+    box["uncertainty"]["constraints"] = [{"terms": {"x": 1, "rz": "9**9**9 cm/deg"}, "max": "1 cm"}]
+    assert "constraints" in refused(data).path
+    box["uncertainty"]["constraints"] = [{"terms": {"x": 1, "rz": "1 cm/deg"}, "max": "1e300 ly"}]
+    assert "constraints" in refused(data).path
+
+
+# --------------------------------------------------------------------------------------------
+# End to end: exit 2 naming the field, at once
+
+
+@pytest.mark.parametrize(
+    ("value", "message"),
+    [("1e300 lightyear", "not finite"), ("9**9**9 cm", "no expressions")],
+)
+def test_cli_refuses_extreme_quantities_with_exit_2(
+    tmp_path: Path, value: str, message: str
+) -> None:
+    data = seed()
+    i, box = frame(data, "box")
+    box["pose"]["translation"][0] = value
+    task = tmp_path / "task.yaml"
+    task.write_text(yaml.safe_dump(data), encoding="utf-8")
+    for command in (["errors", str(task), "--from", "BH1", "--to", "PIN1"], ["plan", str(task)]):
+        result = subprocess.run(
+            [sys.executable, "-m", "synth.cli", *command],
+            capture_output=True,
+            text=True,
+            timeout=60,
+            cwd=ROOT,
+        )
+        assert result.returncode == 2, result.stdout + result.stderr
+        assert f"frames[{i}].pose.translation[0]" in result.stderr and message in result.stderr
