@@ -73,9 +73,9 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from synth.models.loader import load_task
-    from synth.pipeline import SynthesisOptions, synthesize
+    from synth.pipeline import SequenceSynthesis, SynthesisOptions, synthesize
     from synth.replay.proof import ProofOptions
-    from synth.report import plan_summary
+    from synth.report import plan_summary, sequence_summary
     from synth.strategies import PlanOptions
 
     spec = load_task(args.task)
@@ -106,7 +106,10 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(result.to_json(), indent=2))
     else:
-        print(plan_summary(result.plan, result.proof))
+        if isinstance(result, SequenceSynthesis):
+            print(sequence_summary(result.sequence, result.proof))
+        else:
+            print(plan_summary(result.plan, result.proof))
         if args.output is not None:
             print(f"AL program written to {args.output}")
     return 0

@@ -15,27 +15,52 @@ benchmarks and the end-to-end tests call; none of them composes the stages itsel
 
 The proof's trials run in one :class:`~synth.replay.trials.TrialPool` for the whole call, so
 proving a second candidate does not start the workers again.
+
+A task with several insertions (``insertions:``) goes the same way as a whole
+(:class:`SequenceSynthesis`): :func:`~synth.strategies.sequence.plan_sequence` plans the steps,
+each step's candidate accepted by the nominal replay of its own program from where the step
+before left the arm (which gives the next step's start); the steps' programs and the
+corrections between them become one program (:func:`~synth.codegen.sequence.emit_sequence`),
+proven as a whole: nominal run and Monte Carlo over every step's pin, in the task's own
+uncertainty, never the planner's reduced one.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+from numpy.typing import NDArray
+
 from synth.codegen.emitter import emit_program
+from synth.codegen.sequence import SequenceStep, emit_sequence
 from synth.errors.locate import believed_graph
+from synth.exceptions import NoStrategyError
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
 from synth.models.spec import TaskSpec
 from synth.replay.proof import Proof, ProofOptions, prove
+from synth.replay.run import build_context as replay_context
+from synth.replay.run import machine_for, run_machine
 from synth.replay.trials import TrialPool
+from synth.replay.truth import HandErrors, nominal_world
+from synth.strategies.causes import root_cause
 from synth.strategies.options import PlanOptions
 from synth.strategies.planner import plan_task
 from synth.strategies.records import PinInHoleStrategy, PlanResult, Rejection
+from synth.strategies.sequence import SequencePlan, StepCheck, plan_sequence
 
-__all__ = ["CandidateProof", "Synthesis", "SynthesisOptions", "synthesize"]
+__all__ = [
+    "CandidateProof",
+    "SequenceSynthesis",
+    "Synthesis",
+    "SynthesisOptions",
+    "synthesize",
+]
 
 Progress = Callable[[str, int, int], None]
 """``progress(candidate, done, budget)``: proof trials finished for the candidate named."""
@@ -109,13 +134,76 @@ def _task(task: TaskSpec | str | Path, base_dir: str | Path | None) -> tuple[Tas
     return load_task(path), Path(base_dir) if base_dir is not None else path.resolve().parent
 
 
+@dataclass(frozen=True, eq=False)
+class SequenceSynthesis:
+    """A proven assembly sequence: its plan, the one program and that program's proof."""
+
+    task: TaskSpec
+    graph: AttributeGraph
+    sequence: SequencePlan
+    program: str
+    attempts: tuple[CandidateProof, ...]
+
+    @property
+    def proof(self) -> Proof:
+        """The program's proof."""
+        return self.attempts[-1].proof
+
+    def to_json(self) -> dict[str, Any]:
+        """``synth plan --json`` of a sequence: one record per step, the program, the proof."""
+        steps = []
+        for s in self.sequence.steps:
+            errors = s.strategy.errors
+            record: dict[str, Any] = {
+                "step": s.index + 1,
+                "pin": s.insertion.pin,
+                "hole": s.insertion.hole,
+                "time": s.time,
+                "strategy": s.strategy.to_json(),
+                "errors": None if errors is None else errors.to_json(),
+                "reuse": None,
+            }
+            if isinstance(s.alone, str):
+                record["without_reuse"] = {"refused": s.alone}
+            elif s.alone is not None:
+                before = s.alone.strategy.errors
+                record["without_reuse"] = {
+                    "time": s.alone.strategy.goodness,
+                    "errors": None if before is None else before.to_json(),
+                    "search": s.alone.strategy.search is not None,
+                    "tap": s.alone.strategy.tap is not None,
+                }
+                record["saved"] = s.saved
+            if s.knowledge is not None:
+                k = s.knowledge
+                record["reuse"] = {
+                    "part": k.part_al,
+                    "located_by": k.hole_al,
+                    "corrected_axes": list(k.corrected),
+                    "reading_error": k.epsilon,
+                    "before": {p: [b.lo, b.hi] for p, b in k.before.bounds().items()},
+                    "after": {p: [b.lo, b.hi] for p, b in k.after.bounds().items()},
+                }
+            steps.append(record)
+        return {
+            "task": self.task.name,
+            "order": self.sequence.order,
+            "expected_time": self.sequence.expected_time,
+            "orders_expanded": self.sequence.expanded,
+            "steps_planned": self.sequence.planned,
+            "steps": steps,
+            "program": self.program,
+            "proof": self.proof.to_json(),
+        }
+
+
 def synthesize(
     task: TaskSpec | str | Path,
     options: SynthesisOptions | None = None,
     *,
     base_dir: str | Path | None = None,
     progress: Progress | None = None,
-) -> Synthesis:
+) -> Synthesis | SequenceSynthesis:
     """Take ``task`` (a spec or a task file) to a proven program (see the module docstring).
 
     ``base_dir`` resolves a URDF arm's relative paths (default: the task file's directory).
@@ -124,6 +212,10 @@ def synthesize(
     """
     opts = options or SynthesisOptions()
     spec, where = _task(task, base_dir)
+    if len(spec.steps) == 1 and spec.insertion is None:
+        spec = spec.step(spec.steps[0])  # a one-step list is a single insertion
+    if spec.is_sequence:
+        return _synthesize_sequence(spec, opts, where, progress)
     proof_options = opts.proof or ProofOptions.for_task(spec)
     graph = believed_graph(spec)
     attempts: list[CandidateProof] = []
@@ -158,3 +250,100 @@ def synthesize(
 
 def _named(progress: Progress, name: str) -> Callable[[int, int], None]:
     return lambda done, total: progress(name, done, total)
+
+
+MAX_SEQUENCE_ATTEMPTS = 4
+"""Sequences proven before giving up: after a failed proof the step it failed in gives up its
+strategy and the sequence is planned again."""
+
+
+def _step_check(base_dir: Path | None, banned: dict[int, set[str]]) -> StepCheck:
+    """Accept a step's strategy by the nominal replay of its program; return where it ends.
+
+    Strategies in ``banned[step]`` failed a proof of the whole sequence and are refused.
+    """
+
+    def check(
+        index: int,
+        task: TaskSpec,
+        q_start: NDArray[np.float64] | None,
+        strategy: PinInHoleStrategy,
+    ) -> tuple[Rejection | None, NDArray[np.float64] | None]:
+        if strategy.name in banned.get(index, set()):
+            reason = "the sequence holding it failed its replay proof in this step"
+            return Rejection(strategy.name, reason, cause="proof", stage="proof"), None
+        graph = believed_graph(task)
+        body = emit_program(strategy, graph)
+        context = replay_context(body, task, base_dir=base_dir)
+        if q_start is not None:
+            context = dataclasses.replace(context, q_park=np.array(q_start, dtype=float))
+        machine = machine_for(context, nominal_world(context.graph), HandErrors.none())
+        report, _ = run_machine(context, machine)
+        if report.outcome != "success":
+            where = f" at AL line {report.line}" if report.line else ""
+            reason = f"nominal replay of the step: {report.outcome}{where}: {report.message}"
+            return Rejection(strategy.name, reason, cause="proof", stage="proof"), None
+        return None, machine.configuration
+
+    return check
+
+
+def _failing_line(proof: Proof) -> int | None:
+    if proof.nominal.outcome != "success":
+        return proof.nominal.line
+    return None if proof.first_failure is None else proof.first_failure.line
+
+
+def _step_at(program: str, line: int | None, count: int) -> int | None:
+    """Which step (0-based, in execution order) the program's ``line`` belongs to."""
+    if line is None:
+        return None
+    starts = [
+        n for n, text in enumerate(program.splitlines(), start=1) if text.startswith("{ STEP ")
+    ]
+    if len(starts) != count:
+        return None
+    before = [k for k, start in enumerate(starts) if start <= line]
+    return before[-1] if before else None
+
+
+def _synthesize_sequence(
+    spec: TaskSpec, opts: SynthesisOptions, where: Path | None, progress: Progress | None
+) -> SequenceSynthesis:
+    proof_options = opts.proof or ProofOptions.for_task(spec)
+    graph = believed_graph(spec)
+    banned: dict[int, set[str]] = {}
+    attempts: list[CandidateProof] = []
+    with TrialPool(proof_options.workers) as pool:
+        for attempt in range(1, MAX_SEQUENCE_ATTEMPTS + 1):
+            sequence = plan_sequence(
+                spec, _step_check(where, banned), options=opts.plan, base_dir=where
+            )
+            steps = [
+                SequenceStep(
+                    graph.al_names[graph.resolve(s.insertion.pin)],
+                    graph.al_names[graph.resolve(s.insertion.hole)],
+                    emit_program(s.strategy, believed_graph(s.task)),
+                    # after the last seat nothing is left to correct for
+                    s.knowledge if k < len(sequence.steps) else None,
+                )
+                for k, s in enumerate(sequence.steps, start=1)
+            ]
+            program = emit_sequence(steps, graph, sequence.expected_time)
+            label = f"sequence {attempt}: " + ", ".join(s.strategy.name for s in sequence.steps)
+            report = None if progress is None else _named(progress, label)
+            proof = prove(program, spec, proof_options, base_dir=where, pool=pool, progress=report)
+            attempts.append(CandidateProof(label, proof))
+            if proof.passed:
+                if opts.preamble:
+                    program = emit_sequence(steps, graph, sequence.expected_time, preamble=True)
+                return SequenceSynthesis(spec, graph, sequence, program, tuple(attempts))
+            failed = _step_at(program, _failing_line(proof), len(sequence.steps))
+            if failed is None:
+                break
+            step = sequence.steps[failed]
+            banned.setdefault(step.index, set()).add(step.strategy.name)
+    rejections = tuple(
+        Rejection(a.candidate, a.proof.reason(), cause="proof", stage="proof") for a in attempts
+    )
+    raise NoStrategyError(spec.name, rejections, root_cause(list(rejections)))

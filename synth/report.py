@@ -18,6 +18,7 @@ from synth.strategies.records import Destination, PinInHoleStrategy, PlanResult
 
 if TYPE_CHECKING:
     from synth.replay.proof import Proof
+    from synth.strategies.sequence import SequencePlan
 
 _ROWS = (
     ("dx", "Δx", "length"),
@@ -307,4 +308,58 @@ def plan_summary(result: PlanResult, proof: Proof | None = None) -> str:
     ] or ["  none"]
     counts = ", ".join(f"{k} {v}" for k, v in result.counters.items())
     lines += ["", f"Planning time {result.planning_time:.3f} s ({counts})"]
+    return "\n".join(lines)
+
+
+def _fine_words(s: PinInHoleStrategy) -> str:
+    """``search 3 rings`` / ``tap`` / ``no tap, no search``: a step's fine motion in words."""
+    parts = []
+    if s.tap is not None:
+        parts.append("tap")
+    if s.search is not None:
+        parts.append(f"search {s.search.rings} rings, {s.search.expected_points} points expected")
+    return ", ".join(parts) or "no tap, no search"
+
+
+def sequence_summary(sequence: SequencePlan, proof: Proof | None = None) -> str:
+    """The ``synth plan`` text of an assembly sequence: each step, what reuse saved, the proof."""
+    lines = [
+        f"Assembly sequence of {len(sequence.steps)} steps (order {sequence.order}; "
+        f"{sequence.planned} step plans, {sequence.expanded} prefixes expanded); "
+        f"estimated time {sequence.expected_time:.2f} s",
+        "",
+    ]
+    for k, step in enumerate(sequence.steps, start=1):
+        s = step.strategy
+        lines.append(
+            f"Step {k}: {step.insertion.pin} into {step.insertion.hole} — {s.name}, "
+            f"{step.time:.2f} s ({_fine_words(s)})"
+        )
+        if s.errors is not None:
+            lines.append(
+                f"  errors at the hole: ±{_num(100 * s.errors.dx)} × ±{_num(100 * s.errors.dy)} cm,"
+                f" Δz ±{_num(100 * s.errors.dz)} cm"
+            )
+        if isinstance(step.alone, str):
+            lines.append(f"  without what the earlier seats taught: refused ({step.alone})")
+        elif step.alone is not None:
+            a = step.alone.strategy
+            before = (
+                ""
+                if a.errors is None
+                else (f"±{_num(100 * a.errors.dx)} × ±{_num(100 * a.errors.dy)} cm, ")
+            )
+            lines.append(
+                f"  without what the earlier seats taught: {before}{a.goodness:.2f} s "
+                f"({_fine_words(a)}); saved {step.saved:.2f} s"
+            )
+        if step.knowledge is not None and k < len(sequence.steps):
+            kn = step.knowledge
+            axes = ", ".join(kn.corrected) or "no axis"
+            lines.append(
+                f"  then {kn.part_al} is corrected from the seated {kn.pin_al} along {axes} "
+                f"(reading error ≤ {_num(100 * kn.epsilon)} cm)"
+            )
+    if proof is not None:
+        lines += ["", f"Proof: {proof.summary()}"]
     return "\n".join(lines)

@@ -10,7 +10,8 @@ error: the hand positioning error carried to the pin's end plus the pin's play i
 
 with t_hand, θ_hand the hand-error block's translation and rotation bounds (vector norms) and d
 the grasp distance (the hand origin to the pin's end). The program then corrects P by the
-measured offset along the translation axes P's block bounds, P ← P·TRANS(NILROTN, Δ) with Δ the
+measured offset along the translation axes P's block bounds more loosely than ε_max (elsewhere
+the reading would be the worse knowledge), P ← P·TRANS(NILROTN, Δ) with Δ the
 offset in P's axes (translation only: one point says nothing about P's turn about it; an axis
 P was exact in stays uncorrected, so the reading's error never enters it), and P's holes,
 affixed to it, move with it.
@@ -39,6 +40,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import pinocchio as pin
+from pinocchio import rpy as pin_rpy
 
 from synth.models.graph import AttributeGraph
 from synth.models.insertion import derive
@@ -52,11 +55,12 @@ from synth.models.spec import (
     LinearConstraint,
     PinShape,
     Pose,
+    Rotation,
     TaskSpec,
     Uncertainty,
 )
 
-__all__ = ["SeatKnowledge", "after_seat", "seat_error"]
+__all__ = ["SeatKnowledge", "after_seat", "seat_error", "seated"]
 
 
 @dataclass(frozen=True)
@@ -80,6 +84,24 @@ class SeatKnowledge:
     before: Uncertainty
     after: Uncertainty
     spec: TaskSpec
+
+
+def pin_se3_z(z: float) -> pin.SE3:
+    """trans(NILROTN, (0, 0, z)) [m]."""
+    return pin.SE3(np.eye(3), np.array([0.0, 0.0, z]))
+
+
+def seated(spec: TaskSpec, insertion: InsertionSpec) -> TaskSpec:
+    """The task with the insertion's pin standing in its hole, tip d_f deep (nothing learnt)."""
+    graph = AttributeGraph(spec)
+    pin_name, hole = graph.resolve(insertion.pin), graph.resolve(insertion.hole)
+    d_f = derive(graph, insertion).d_f
+    pose = Pose.model_validate({"translation": ["0 m", "0 m", f"{-d_f!r} m"]})
+    frames = tuple(
+        f.model_copy(update={"parent": hole, "pose": pose}) if f.name == pin_name else f
+        for f in spec.frames
+    )
+    return spec.model_copy(update={"frames": frames})
 
 
 def seat_error(spec: TaskSpec, insertion: InsertionSpec, grasp_distance: float) -> float:
@@ -143,7 +165,12 @@ def after_seat(
     coefficients = _cross_coefficients(seat_in_part)
     fields: dict[str, Bound] = dict(rotations)
     constraints: list[LinearConstraint] = []
-    corrected = tuple(a for a in TRANSLATION_PARAMS if a in before.bounds())
+    # An axis is corrected only where the part is known worse than the reading: else the
+    # reading's error would replace a smaller one.
+    known = before.bounds()
+    corrected = tuple(
+        a for a in TRANSLATION_PARAMS if a in known and max(-known[a].lo, known[a].hi) > epsilon
+    )
     for axis in corrected:
         terms = {j: c for j, c in coefficients[axis].items() if j in rotations and c != 0.0}
         reach = sum(abs(c) * max(-rotations[j].lo, rotations[j].hi) for j, c in terms.items())
@@ -154,7 +181,12 @@ def after_seat(
                     terms={axis: 1.0, **terms}, min=-half, max=half, kind="length"
                 )
             )
-    kept = [c for c in before.constraints if all(p in ROTATION_PARAMS for p in c.terms)]
+    # An uncorrected axis keeps its bound, and a constraint survives when it touches none of the
+    # corrected axes (their parameters now mean the error relative to the corrected frame).
+    for axis in TRANSLATION_PARAMS:
+        if axis in known and axis not in corrected:
+            fields[axis] = known[axis]
+    kept = [c for c in before.constraints if not any(p in corrected for p in c.terms)]
     after = Uncertainty.model_construct(
         None,
         constraints=(*constraints, *kept),
@@ -162,15 +194,47 @@ def after_seat(
         **fields,
     )
     pin_name = graph.resolve(insertion.pin)
-    frames = []
-    seated = Pose.model_validate({"translation": ["0 m", "0 m", f"{-d_f!r} m"]})
+    # The seated pin itself is where the reading put it, to within ε along the corrected axes
+    # (along the others, where the part's own error and turn put it): a solid of its own.
+    pin_bounds: dict[str, Bound] = {}
+    for axis in TRANSLATION_PARAMS:
+        rotation_reach = sum(
+            abs(c) * max(-rotations[j].lo, rotations[j].hi)
+            for j, c in coefficients[axis].items()
+            if j in rotations
+        )
+        prior = max(-known[axis].lo, known[axis].hi) if axis in known else 0.0
+        if axis in corrected:
+            extent = half
+        elif prior or rotation_reach:
+            extent = prior + rotation_reach + (rho if rotation_reach else 0.0)
+        else:
+            extent = 0.0
+        if extent > 0.0:
+            pin_bounds[axis] = Bound(lo=-extent, hi=extent)
+    world_seat = graph.world_from(hole) * pin_se3_z(-d_f)
+    roll, pitch, yaw = (float(v) for v in pin_rpy.matrixToRpy(world_seat.rotation))
+    pin_pose = Pose.model_construct(
+        translation=tuple(float(v) for v in world_seat.translation),
+        rotation=tuple(
+            Rotation.model_construct(axis=a, angle=v)
+            for a, v in (("z", yaw), ("y", pitch), ("x", roll))
+            if abs(v) > 1e-15
+        ),
+    )
+    pin_block = Uncertainty.model_construct(
+        None, constraints=(), distribution=before.distribution, **pin_bounds
+    )
+    located = []
     for f in spec.frames:
         if f.name == part:
             f = f.model_copy(update={"uncertainty": after})
         elif f.name == pin_name:
-            f = f.model_copy(update={"parent": hole, "pose": seated})
-        frames.append(f)
-    next_spec = spec.model_copy(update={"frames": tuple(frames)})
+            f = f.model_copy(
+                update={"parent": WORLD, "pose": pin_pose, "uncertainty": pin_block or None}
+            )
+        located.append(f)
+    next_spec = spec.model_copy(update={"frames": tuple(located)})
     return SeatKnowledge(
         part=part,
         part_al=graph.al_names[part],

@@ -268,6 +268,11 @@ class ReplayMachine(MotionGate):
         """Sensed torque about world ``axis`` through the hand origin [N·m]."""
         return float(self._torque @ np.asarray(axis, dtype=float))
 
+    @property
+    def configuration(self) -> NDArray[np.float64]:
+        """The arm's joint configuration now (a copy): where a later program starts."""
+        return self._q.copy()
+
     def time(self) -> float:
         """The simulated clock [s]."""
         return self._time

@@ -177,16 +177,18 @@ def run_machine(context: ReplayContext, machine: ReplayMachine) -> tuple[RunRepo
             "abort", result.abort.message, result.abort.line, result.time, result.statements
         )
         return report, interpreter
-    insertion = context.spec.insertion
-    if insertion is None:
+    steps = context.spec.steps
+    if not steps:
         report = RunReport(
             "success", "the program ran to its end", None, result.time, result.statements
         )
         return report, interpreter
-    pin_frame = context.graph.resolve(insertion.pin)
-    hole_frame = context.graph.resolve(insertion.hole)
-    achieved, why = machine.goal(pin_frame, hole_frame)
-    outcome: Outcome = "success" if achieved else "failure"
+    # Every step's pin must stand seated in its hole at the end (a sequence: each one named).
+    verdicts = [
+        machine.goal(context.graph.resolve(s.pin), context.graph.resolve(s.hole)) for s in steps
+    ]
+    outcome: Outcome = "success" if all(ok for ok, _ in verdicts) else "failure"
+    why = "; ".join(w for _, w in verdicts)
     return RunReport(outcome, why, None, result.time, result.statements), interpreter
 
 

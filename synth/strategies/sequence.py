@@ -1,0 +1,255 @@
+"""Assembly sequences: several insertions planned together (seed IV ch. 5, L2870–2890).
+
+"In selecting a grasping method for the first pin, we should remember that our choice will also
+affect how much time will be required to pick up the second pin … Inserting the first pin gives
+us information about the box location." A sequence is planned step by step, each step by the
+single-insertion planner (:func:`synth.strategies.planner.plan_task`) in the world the steps
+before it leave:
+
+* the arm starts where the last step ended (the first step: at the park), so a step's pickup
+  time depends on the choices before it;
+* the pins already inserted stand in their holes (solids of the gross-motion check);
+* with ``reuse``, every part a seat located carries its reduced block
+  (:func:`synth.errors.seat.after_seat`), so the next footprint, tap and search are planned from
+  what the program will know then (the program corrects the part's frame after the seat).
+
+Order (``insertions.order``): ``fixed`` runs the listed order; ``free`` searches every order
+best-first. A node is a prefix of steps with its cost g = Σ expected step times (each step's
+``goodness``: pickup + transport + fine motion); the frontier is expanded cheapest first and the
+first complete sequence taken. The heuristic is h = 0, which is admissible (no step takes
+negative time), so the first complete sequence popped has the least expected total time of all
+orders, given each step's best-first plan (a step's time is not bounded below usefully without
+planning it: it depends on where the arm comes from and on what the earlier seats taught).
+
+Where a step ends is not the planner's to guess: ``check`` (the pipeline's nominal replay of the
+step's program from its start) accepts a step's strategy and returns the arm's final
+configuration, the next step's start. The planner emits nothing.
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from synth.errors.seat import SeatKnowledge, after_seat, seated
+from synth.exceptions import NoStrategyError
+from synth.models.spec import InsertionSpec, TaskSpec
+from synth.strategies.causes import root_cause
+from synth.strategies.options import PlanOptions
+from synth.strategies.planner import plan_task
+from synth.strategies.records import PinInHoleStrategy, PlanResult, Rejection
+
+__all__ = ["SequencePlan", "StepCheck", "StepPlan", "plan_sequence"]
+
+StepCheck = Callable[
+    [int, TaskSpec, NDArray[np.float64] | None, PinInHoleStrategy],
+    tuple[Rejection | None, NDArray[np.float64] | None],
+]
+"""``check(step, step_task, q_start, strategy)`` → (None, q_end) to accept a strategy for
+step ``step`` (its index in ``insertions``), or (a rejection, None): the pipeline emits the
+step's program and replays it nominally."""
+
+
+@dataclass(frozen=True, eq=False)
+class StepPlan:
+    """One planned step: its insertion, the task it was planned in, and what its seat teaches.
+
+    ``alone`` is the same step planned without the earlier steps' knowledge (same start, same
+    pins standing), for the report of what reuse saved: its plan, or the first line of its
+    refusal; None when not compared.
+    """
+
+    index: int
+    insertion: InsertionSpec
+    task: TaskSpec
+    plan: PlanResult
+    knowledge: SeatKnowledge | None
+    q_start: NDArray[np.float64] | None
+    q_end: NDArray[np.float64]
+    alone: PlanResult | str | None = None
+
+    @property
+    def strategy(self) -> PinInHoleStrategy:
+        """The step's chosen strategy."""
+        return self.plan.strategy
+
+    @property
+    def time(self) -> float:
+        """Expected time of the step [s]."""
+        return self.plan.strategy.goodness
+
+    @property
+    def saved(self) -> float | None:
+        """Expected time reuse saved on this step [s] (None: not compared, or refused alone)."""
+        if not isinstance(self.alone, PlanResult):
+            return None
+        return self.alone.strategy.goodness - self.time
+
+
+@dataclass(frozen=True, eq=False)
+class SequencePlan:
+    """The chosen sequence: steps in execution order, and how the order search went."""
+
+    task: TaskSpec
+    steps: tuple[StepPlan, ...]
+    order: str
+    expanded: int
+    planned: int
+    reuse: bool
+    rejected: tuple[Rejection, ...] = ()
+
+    @property
+    def expected_time(self) -> float:
+        """Σ step times [s]."""
+        return sum(s.time for s in self.steps)
+
+    @property
+    def planning_time(self) -> float:
+        """Σ of the step plans' planning times [s] (the chosen steps')."""
+        return sum(s.plan.planning_time for s in self.steps)
+
+
+@dataclass(order=True)
+class _Node:
+    cost: float
+    tie: int
+    done: tuple[int, ...] = field(compare=False)
+    steps: tuple[StepPlan, ...] = field(compare=False)
+    believed: TaskSpec = field(compare=False)
+    q: NDArray[np.float64] | None = field(compare=False)
+
+
+def plan_sequence(
+    spec: TaskSpec,
+    check: StepCheck,
+    *,
+    options: PlanOptions | None = None,
+    base_dir: Path | str | None = None,
+    reuse: bool = True,
+    compare: bool = True,
+) -> SequencePlan:
+    """Plan every insertion of ``spec`` (module docstring); NoStrategyError when none works.
+
+    ``compare`` also plans each chosen step without the earlier seats' knowledge (``alone``).
+    """
+    steps = spec.steps
+    order = spec.insertions.order if spec.insertions is not None else "fixed"
+    counter = itertools.count()
+    frontier = [_Node(0.0, next(counter), (), (), spec, None)]
+    rejected: list[Rejection] = []
+    expanded = planned = 0
+    while frontier:
+        node = heapq.heappop(frontier)
+        if len(node.done) == len(steps):
+            chosen = node.steps
+            if compare and reuse:
+                chosen = tuple(_compared(s, spec, node, options, base_dir) for s in chosen)
+            return SequencePlan(spec, chosen, order, expanded, planned, reuse, tuple(rejected))
+        expanded += 1
+        remaining = [i for i in range(len(steps)) if i not in node.done]
+        for i in remaining if order == "free" else remaining[:1]:
+            insertion = steps[i]
+            task = node.believed.step(insertion)
+            planned += 1
+            made = _plan_step(task, insertion, i, node.q, check, options, base_dir)
+            if isinstance(made, Rejection):
+                rejected.append(made)
+                continue
+            knowledge = after_seat(task, insertion, made.strategy.pickup.grasp.distance)
+            believed = (
+                knowledge.spec
+                if (reuse and knowledge is not None)
+                else seated(node.believed, insertion)
+            )
+            step = StepPlan(
+                i, insertion, task, made.plan, knowledge if reuse else None, node.q, made.q_end
+            )
+            heapq.heappush(
+                frontier,
+                _Node(
+                    node.cost + step.time,
+                    next(counter),
+                    (*node.done, i),
+                    (*node.steps, step),
+                    believed,
+                    made.q_end,
+                ),
+            )
+    root = root_cause(rejected)
+    raise NoStrategyError(spec.name, tuple(rejected), root)
+
+
+@dataclass(frozen=True, eq=False)
+class _Made:
+    plan: PlanResult
+    q_end: NDArray[np.float64]
+
+    @property
+    def strategy(self) -> PinInHoleStrategy:
+        return self.plan.strategy
+
+
+def _plan_step(
+    task: TaskSpec,
+    insertion: InsertionSpec,
+    index: int,
+    q_start: NDArray[np.float64] | None,
+    check: StepCheck,
+    options: PlanOptions | None,
+    base_dir: Path | str | None,
+) -> _Made | Rejection:
+    ends: dict[str, NDArray[np.float64]] = {}
+
+    def accept(strategy: PinInHoleStrategy) -> Rejection | None:
+        rejection, q_end = check(index, task, q_start, strategy)
+        if rejection is None and q_end is not None:
+            ends[strategy.name] = q_end
+        return rejection
+
+    label = f"step {index + 1} ({insertion.pin} into {insertion.hole})"
+    try:
+        plan = plan_task(task, options=options, base_dir=base_dir, accept=accept, q_start=q_start)
+    except NoStrategyError as exc:
+        first = str(exc).splitlines()[0]
+        return Rejection(label, first, cause=exc.root.cause if exc.root else None)
+    return _Made(plan, ends[plan.strategy.name])
+
+
+def _compared(
+    step: StepPlan,
+    spec: TaskSpec,
+    node: _Node,
+    options: PlanOptions | None,
+    base_dir: Path | str | None,
+) -> StepPlan:
+    """``step`` with ``alone``: planned from the same start with the task's own blocks."""
+    if step.index == node.steps[0].index:
+        return step  # the first step knows nothing earlier seats could have taught
+    plain = spec
+    for earlier in node.steps:
+        if earlier.index == step.index:
+            break
+        plain = seated(plain, earlier.insertion)
+    alone: PlanResult | str
+    try:
+        alone = plan_task(
+            plain.step(step.insertion), options=options, base_dir=base_dir, q_start=step.q_start
+        )
+    except NoStrategyError as exc:
+        alone = str(exc).splitlines()[0]
+    return StepPlan(
+        step.index,
+        step.insertion,
+        step.task,
+        step.plan,
+        step.knowledge,
+        step.q_start,
+        step.q_end,
+        alone,
+    )
