@@ -32,7 +32,8 @@ GOLDEN = ROOT / "fixtures" / "golden"
 TASKS_DIR = ROOT / "fixtures" / "tasks"
 SEED_RECORDS = ROOT / "tests" / "data" / "seed_strategies.py"
 MANIFEST = GOLDEN / "manifest.json"
-TASKS: tuple[str, ...] = ("seed_4_8", "seed_4_8_tap")
+TASKS: tuple[str, ...] = ("seed_4_8", "seed_4_8_tap", "seed_box_two_pins")
+"""The golden programs: the seed's two tasks, and a two-pin assembly sequence (one program)."""
 SOURCES = ("auto", "planner", "seed")
 
 
