@@ -78,6 +78,9 @@ class SynthesisOptions:
     plan: PlanOptions = field(default_factory=PlanOptions)
     proof: ProofOptions | None = None
     preamble: bool = False
+    reuse: bool = True
+    """A sequence's steps use what earlier seats taught (False: each step alone, no
+    corrections in the program; for comparisons)."""
 
 
 @dataclass(frozen=True)
@@ -317,7 +320,11 @@ def _synthesize_sequence(
     with TrialPool(proof_options.workers) as pool:
         for attempt in range(1, MAX_SEQUENCE_ATTEMPTS + 1):
             sequence = plan_sequence(
-                spec, _step_check(where, banned), options=opts.plan, base_dir=where
+                spec,
+                _step_check(where, banned),
+                options=opts.plan,
+                base_dir=where,
+                reuse=opts.reuse,
             )
             steps = [
                 SequenceStep(

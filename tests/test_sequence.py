@@ -209,3 +209,20 @@ def test_plate_json_one_record_per_step_and_no_second_tap(tmp_path, capsys):
     assert main(["replay", str(program), "--task", str(PLATE), "--trials", "0"]) == 0
     out = capsys.readouterr().out
     assert "PIN1" in out and "PIN2" in out and "PH1" in out and "PH2" in out
+
+
+def test_the_service_accepts_a_sequence(tmp_path):
+    from _server_support import YAML, client_for
+
+    from server.settings import Settings
+
+    settings = Settings(db_url=str(tmp_path / "plans.db"), workers=1, plan_timeout=120.0)
+    with client_for(settings) as client:
+        answer = client.post(
+            "/v1/plans?trials=2&validate=true", content=PLATE.read_text(), headers=YAML
+        )
+    assert answer.status_code == 201, answer.text
+    plan = answer.json()
+    assert plan["program"].startswith("{ ASSEMBLY SEQUENCE: 2 STEPS")
+    assert [s["hole"] for s in plan["steps"]] == ["PH1", "PH2"]
+    assert plan["validation"]["nominal"]["outcome"] == "success"
