@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from synth.exceptions import NoStrategyError
+from synth.exceptions import NoStrategyError, SpecError
 from synth.models.loader import parse_task
 from synth.strategies.causes import classify
 from synth.strategies.planner import plan_task
@@ -52,7 +52,14 @@ def test_plan_refuses_a_tiny_dr_ok_naming_the_footprint() -> None:
 
 
 def test_plan_refuses_a_zero_dr_ok_instead_of_dividing_by_it() -> None:
+    # A task file with dr_ok 0 is refused at load, naming the field; a spec built in code that
+    # bypasses the schema still gets the planner's refusal, never a division by zero.
     text = SEED_TASK.read_text().replace("dr_ok: 0.762 cm", "dr_ok: 0 cm")
+    with pytest.raises(SpecError, match=r"insertion\.dr_ok.*must be > 0"):
+        parse_task(text)
+    spec = parse_task(SEED_TASK.read_text())
+    assert spec.insertion is not None
+    zero = spec.model_copy(update={"insertion": spec.insertion.model_copy(update={"dr_ok": 0.0})})
     with pytest.raises(NoStrategyError) as info:
-        plan_task(parse_task(text))
+        plan_task(zero)
     assert info.value.root.cause == "footprint"
