@@ -95,25 +95,31 @@ class CandidateProof:
         return {"candidate": self.candidate, "proof": self.proof.to_json()}
 
 
-@dataclass(frozen=True, eq=False)
-class Synthesis:
-    """A proven program: the plan that chose it, its text, and the proofs tried.
+@dataclass(frozen=True, eq=False, kw_only=True)
+class _Proven:
+    """What every synthesis leaves: the task, its believed world, the program and its proofs.
 
     ``program`` is the text to write (with the preamble when asked); ``attempts`` every
-    candidate proven, the failed ones first, the last being the chosen program's
+    program proven, the failed ones first, the last being the written program's
     (:attr:`proof`); ``graph`` the believed world the program was planned in.
     """
 
     task: TaskSpec
     graph: AttributeGraph
-    plan: PlanResult
     program: str
     attempts: tuple[CandidateProof, ...]
 
     @property
     def proof(self) -> Proof:
-        """The chosen program's proof: the last one tried, the one that passed."""
+        """The written program's proof: the last one tried, the one that passed."""
         return self.attempts[-1].proof
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
+class Synthesis(_Proven):
+    """A proven single-insertion program and the plan that chose it."""
+
+    plan: PlanResult
 
     @property
     def strategy(self) -> PinInHoleStrategy:
@@ -137,20 +143,11 @@ def _task(task: TaskSpec | str | Path, base_dir: str | Path | None) -> tuple[Tas
     return load_task(path), Path(base_dir) if base_dir is not None else path.resolve().parent
 
 
-@dataclass(frozen=True, eq=False)
-class SequenceSynthesis:
+@dataclass(frozen=True, eq=False, kw_only=True)
+class SequenceSynthesis(_Proven):
     """A proven assembly sequence: its plan, the one program and that program's proof."""
 
-    task: TaskSpec
-    graph: AttributeGraph
     sequence: SequencePlan
-    program: str
-    attempts: tuple[CandidateProof, ...]
-
-    @property
-    def proof(self) -> Proof:
-        """The program's proof."""
-        return self.attempts[-1].proof
 
     def to_json(self) -> dict[str, Any]:
         """``synth plan --json`` of a sequence: one record per step, the program, the proof."""
@@ -344,7 +341,13 @@ def _synthesize_sequence(
             if proof.passed:
                 if opts.preamble:
                     program = emit_sequence(steps, graph, sequence.expected_time, preamble=True)
-                return SequenceSynthesis(spec, graph, sequence, program, tuple(attempts))
+                return SequenceSynthesis(
+                    task=spec,
+                    graph=graph,
+                    sequence=sequence,
+                    program=program,
+                    attempts=tuple(attempts),
+                )
             failed = _step_at(program, _failing_line(proof), len(sequence.steps))
             if failed is None:
                 break
