@@ -17,7 +17,9 @@ from synth.exceptions import SynthError
 from synth.replay.cli_command import (  # light: heavy imports run later
     add_replay_parser,
     add_workers_argument,
+    picture_format,
     resolve_workers,
+    write_output,
 )
 
 EXIT_USAGE = 2
@@ -79,6 +81,8 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     from synth.strategies import PlanOptions
 
     spec = load_task(args.task)
+    if args.svg is not None:
+        picture_format(args.svg)
     if args.proof_trials is not None and args.proof_trials < 0:
         raise SynthError(f"--proof-trials must be 0 or more, got {args.proof_trials}")
     if args.min_success is not None and not 0.0 <= args.min_success <= 1.0:
@@ -97,18 +101,21 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     )
     result = synthesize(spec, options, base_dir=Path(args.task).resolve().parent)
     if args.output is not None:
-        out = Path(args.output)
-        try:
-            out.parent.mkdir(parents=True, exist_ok=True)
-            out.write_text(result.program, encoding="utf-8", newline="\n")
-        except OSError as exc:
-            raise SynthError(f"cannot write {out}: {exc.strerror or exc}") from None
+        write_output(args.output, result.program.encode("utf-8"))
+    if args.svg is not None:
+        from synth.pictures.plan import draw_plan, plan_picture
+        from synth.pictures.render import figure_bytes
+
+        figure = draw_plan(plan_picture(result.strategy, result.graph))
+        write_output(args.svg, figure_bytes(figure, picture_format(args.svg)))
     if args.json:
         print(json.dumps(result.to_json(), indent=2))
     else:
         print(plan_summary(result.plan, result.proof))
         if args.output is not None:
             print(f"AL program written to {args.output}")
+        if args.svg is not None:
+            print(f"plan picture written to {args.svg}")
     return 0
 
 
@@ -158,6 +165,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--output",
         metavar="PROGRAM.al",
         help="write the AL program of the chosen strategy to this file (the summary still prints)",
+    )
+    p.add_argument(
+        "--svg",
+        metavar="PICTURE",
+        help="draw the plan (top view in the hole's frame, side view of the heights) to this "
+        "file: SVG, or PNG when it ends in .png",
     )
     p.add_argument(
         "--preamble",

@@ -19,7 +19,8 @@ import json
 import os
 import sys
 import time
-from typing import Any, TextIO
+from pathlib import Path
+from typing import Any, Literal, TextIO
 
 from synth.exceptions import SynthError
 
@@ -28,8 +29,10 @@ __all__ = [
     "ProgressBar",
     "add_replay_parser",
     "add_workers_argument",
+    "picture_format",
     "resolve_workers",
     "run_replay",
+    "write_output",
 ]
 
 DEFAULT_TRIALS = 100
@@ -81,6 +84,26 @@ def resolve_workers(value: int | None) -> int:
     if workers < 1:
         raise SynthError(f"--workers must be 1 or more, got {workers}")
     return workers
+
+
+def picture_format(path: str) -> Literal["svg", "png"]:
+    """The format a picture's file name asks for; a usage error unless ``.svg`` or ``.png``."""
+    lower = path.lower()
+    if lower.endswith(".svg"):
+        return "svg"
+    if lower.endswith(".png"):
+        return "png"
+    raise SynthError(f"{path}: a picture must end in .svg or .png")
+
+
+def write_output(path: str, data: bytes) -> None:
+    """Write an output file (its directory made as needed); a usage error when it cannot."""
+    out = Path(path)
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_bytes(data)
+    except OSError as exc:
+        raise SynthError(f"cannot write {out}: {exc.strerror or exc}") from None
 
 
 def add_replay_parser(sub: Any) -> None:
