@@ -136,6 +136,12 @@ def add_replay_parser(sub: Any) -> None:
         help="print the task's world binding as AL declarations and exit",
     )
     p.add_argument(
+        "--svg",
+        metavar="PICTURE",
+        help="draw the trials' sampled errors, coloured by outcome, failing trials labelled by "
+        "AL line and kind, to this file (SVG, or PNG when it ends in .png)",
+    )
+    p.add_argument(
         "--progress",
         action="store_true",
         help="draw the progress bar on stderr even when it is not a terminal",
@@ -153,6 +159,18 @@ def _read_program(path: str) -> str:
         raise SynthError(f"{path}: cannot read the program: {exc}") from None
 
 
+def _write_montecarlo(args: argparse.Namespace, report: Any) -> None:
+    from synth.models.loader import load_task
+    from synth.pictures.montecarlo import draw_montecarlo, montecarlo_picture
+    from synth.pictures.render import figure_bytes
+    from synth.replay.run import replay_graph, world_errors
+
+    graph = replay_graph(load_task(args.task), args.distribution)
+    errors = [world_errors(graph, args.seed, i) for i in range(len(report.trials))]
+    figure = draw_montecarlo(montecarlo_picture(report, errors, graph))
+    write_output(args.svg, figure_bytes(figure, picture_format(args.svg)))
+
+
 def run_replay(args: argparse.Namespace) -> int:
     """Run ``synth replay`` with parsed ``args``; the exit code (see the module docstring)."""
     from synth.models.loader import load_task
@@ -168,6 +186,10 @@ def run_replay(args: argparse.Namespace) -> int:
     if args.trials < 0:
         raise SynthError(f"--trials must be 0 or more, got {args.trials}")
     workers = resolve_workers(args.workers)
+    if args.svg is not None:
+        picture_format(args.svg)
+        if args.trials == 0:
+            raise SynthError("--svg draws the Monte Carlo trials: give --trials 1 or more")
     text = _read_program(args.program)
 
     from synth.replay.report import replay_summary
@@ -189,12 +211,16 @@ def run_replay(args: argparse.Namespace) -> int:
     finally:
         if bar is not None:
             bar.close()
+    if args.svg is not None:
+        _write_montecarlo(args, report)
     if args.json:
         print(json.dumps(report.to_json(), indent=2))
     else:
         print(replay_summary(report))
         if args.distribution is not None and args.trials:
             print(f"  errors: every block sampled {args.distribution} (--distribution)")
+        if args.svg is not None:
+            print(f"Monte Carlo picture written to {args.svg}")
     if report.ok:
         return 0
     return 2 if report.nominal.outcome == "error" else 1
