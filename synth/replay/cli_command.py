@@ -142,6 +142,19 @@ def add_replay_parser(sub: Any) -> None:
         "AL line and kind, to this file (SVG, or PNG when it ends in .png)",
     )
     p.add_argument(
+        "--trace",
+        metavar="TRACE.json",
+        help="record the nominal run (or --trial I) to this JSON file: time, joints, hand and "
+        "pin poses, events with their AL lines (docs/trace.md)",
+    )
+    p.add_argument(
+        "--trial",
+        type=int,
+        default=None,
+        metavar="I",
+        help="with --trace: record Monte Carlo trial I of --seed instead of the nominal run",
+    )
+    p.add_argument(
         "--progress",
         action="store_true",
         help="draw the progress bar on stderr even when it is not a terminal",
@@ -171,6 +184,15 @@ def _write_montecarlo(args: argparse.Namespace, report: Any) -> None:
     write_output(args.svg, figure_bytes(figure, picture_format(args.svg)))
 
 
+def _write_trace(args: argparse.Namespace, text: str) -> None:
+    from synth.replay.run import build_context
+    from synth.replay.trace import record_run
+
+    context = build_context(text, args.task, filename=args.program, distribution=args.distribution)
+    trace = record_run(context, trial=args.trial, seed=args.seed, program=args.program)
+    write_output(args.trace, (json.dumps(trace.to_json()) + "\n").encode("utf-8"))
+
+
 def run_replay(args: argparse.Namespace) -> int:
     """Run ``synth replay`` with parsed ``args``; the exit code (see the module docstring)."""
     from synth.models.loader import load_task
@@ -190,6 +212,8 @@ def run_replay(args: argparse.Namespace) -> int:
         picture_format(args.svg)
         if args.trials == 0:
             raise SynthError("--svg draws the Monte Carlo trials: give --trials 1 or more")
+    if args.trial is not None and (args.trace is None or args.trial < 0):
+        raise SynthError("--trial I records trial I ≥ 0 and needs --trace TRACE.json")
     text = _read_program(args.program)
 
     from synth.replay.report import replay_summary
@@ -213,6 +237,8 @@ def run_replay(args: argparse.Namespace) -> int:
             bar.close()
     if args.svg is not None:
         _write_montecarlo(args, report)
+    if args.trace is not None:
+        _write_trace(args, text)
     if args.json:
         print(json.dumps(report.to_json(), indent=2))
     else:
@@ -221,6 +247,9 @@ def run_replay(args: argparse.Namespace) -> int:
             print(f"  errors: every block sampled {args.distribution} (--distribution)")
         if args.svg is not None:
             print(f"Monte Carlo picture written to {args.svg}")
+        if args.trace is not None:
+            which = "nominal run" if args.trial is None else f"trial {args.trial}"
+            print(f"trace of the {which} written to {args.trace}")
     if report.ok:
         return 0
     return 2 if report.nominal.outcome == "error" else 1

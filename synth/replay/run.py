@@ -67,6 +67,7 @@ __all__ = [
     "summarise",
     "trial_errors",
     "trial_seed",
+    "trial_world",
     "world_errors",
 ]
 
@@ -215,14 +216,19 @@ def trial_seed(seed: int, index: int) -> np.random.SeedSequence:
     return np.random.SeedSequence(seed, spawn_key=(index,))
 
 
-def run_trial(context: ReplayContext, seed: int, index: int) -> RunReport:
-    """Monte Carlo trial ``index``: a sampled world and hand errors from :func:`trial_seed`."""
+def trial_world(context: ReplayContext, seed: int, index: int) -> tuple[TrueWorld, HandErrors]:
+    """Trial ``index``'s sampled world and hand errors, from :func:`trial_seed`."""
     world_seed, hand_seed = trial_seed(seed, index).spawn(2)
     world = sample_world(context.graph, np.random.default_rng(world_seed))
     manipulator = context.spec.manipulator
     assert manipulator is not None
     hand = HandErrors(manipulator.hand_error, np.random.default_rng(hand_seed))
-    return run_world(context, world, hand)
+    return world, hand
+
+
+def run_trial(context: ReplayContext, seed: int, index: int) -> RunReport:
+    """Monte Carlo trial ``index``: a sampled world and hand errors from :func:`trial_seed`."""
+    return run_world(context, *trial_world(context, seed, index))
 
 
 def summarise(runs: Sequence[RunReport], seed: int) -> MonteCarloReport:
