@@ -119,6 +119,42 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_view(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from synth.models.loader import load_task
+    from synth.pictures.view import view_html, view_scene
+    from synth.replay.run import build_context
+    from synth.replay.trace import record_run
+
+    if args.proof_trials < 0:
+        raise SynthError(f"--proof-trials must be 0 or more, got {args.proof_trials}")
+    base_dir = Path(args.task).resolve().parent
+    spec = load_task(args.task)
+    if args.program is not None:
+        from synth.replay.cli_command import read_program
+
+        text, name = read_program(args.program), args.program
+    else:
+        from synth.pipeline import SynthesisOptions, synthesize
+        from synth.replay.proof import ProofOptions
+
+        proof = ProofOptions.for_task(
+            spec, trials=args.proof_trials, workers=resolve_workers(args.workers)
+        )
+        text = synthesize(spec, SynthesisOptions(proof=proof), base_dir=base_dir).program
+        name = f"{spec.name}.al"
+    context = build_context(text, spec, filename=name, base_dir=base_dir)
+    trace = record_run(context, program=name)
+    write_output(args.output, view_html(view_scene(context, trace, text)).encode("utf-8"))
+    report = trace.report
+    print(
+        f"view of {name} on {spec.name} written to {args.output} "
+        f"(nominal run: {report.outcome}, {report.time:.2f} s, {len(trace.samples)} frames)"
+    )
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``synth`` command."""
     parser = argparse.ArgumentParser(
@@ -226,6 +262,32 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_serve)
 
     add_replay_parser(sub)
+
+    p = sub.add_parser(
+        "view",
+        help="write one offline HTML page: the workcell, the arm and the program's nominal run "
+        "in 3-D, the AL line being executed highlighted",
+    )
+    p.add_argument("task", help="task specification (YAML) with a manipulator")
+    p.add_argument(
+        "program",
+        nargs="?",
+        metavar="PROGRAM.al",
+        help="the AL program to show (default: plan the task and show its program)",
+    )
+    p.add_argument(
+        "-o", "--output", default="view.html", metavar="VIEW.html", help="default: view.html"
+    )
+    p.add_argument(
+        "--proof-trials",
+        type=int,
+        default=0,
+        metavar="N",
+        help="Monte Carlo trials of the plan's proof when no program is given (default: 0, "
+        "the nominal replay only)",
+    )
+    add_workers_argument(p, "the proof's trials")
+    p.set_defaults(func=_cmd_view)
     return parser
 
 

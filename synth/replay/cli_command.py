@@ -30,6 +30,7 @@ __all__ = [
     "add_replay_parser",
     "add_workers_argument",
     "picture_format",
+    "read_program",
     "resolve_workers",
     "run_replay",
     "write_output",
@@ -162,7 +163,8 @@ def add_replay_parser(sub: Any) -> None:
     p.set_defaults(func=run_replay)
 
 
-def _read_program(path: str) -> str:
+def read_program(path: str) -> str:
+    """The text of an AL program file; a usage error when it cannot be read."""
     try:
         with open(path, encoding="utf-8") as f:
             return f.read()
@@ -214,7 +216,7 @@ def run_replay(args: argparse.Namespace) -> int:
             raise SynthError("--svg draws the Monte Carlo trials: give --trials 1 or more")
     if args.trial is not None and (args.trace is None or args.trial < 0):
         raise SynthError("--trial I records trial I ≥ 0 and needs --trace TRACE.json")
-    text = _read_program(args.program)
+    text = read_program(args.program)
 
     from synth.replay.report import replay_summary
     from synth.replay.run import replay
