@@ -14,7 +14,8 @@ $(STAMP): pyproject.toml
 
 demo: $(STAMP)
 	mkdir -p out
-	$(BIN)/synth plan fixtures/tasks/seed_4_8.yaml -o out/seed_4_8.al
+	$(BIN)/synth plan fixtures/tasks/seed_4_8.yaml -o out/seed_4_8.al --svg out/seed_4_8_plan.svg
+	$(BIN)/synth view fixtures/tasks/seed_4_8.yaml out/seed_4_8.al -o out/seed_4_8_view.html
 	$(BIN)/synth errors fixtures/tasks/seed_4_8.yaml --from BH1 --to PIN1
 	$(BIN)/synth errors fixtures/tasks/screw_on_driver.yaml --from hole --to tip
 

@@ -161,3 +161,10 @@ def test_cli_writes_svg_and_png(tmp_path: Path) -> None:
     assert main(["plan", task, "--proof-trials", "0", "--workers", "1", "--svg", str(png)]) == 0
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert main(["plan", task, "--svg", str(tmp_path / "plan.pdf")]) == 2
+
+
+def test_the_readme_picture_is_the_seeds_plan(seed: Synthesis) -> None:
+    committed = SvgFigure((FIXTURES.parents[1] / "docs" / "img" / "seed_4_8_plan.svg").read_bytes())
+    drawn = committed.to_data("top-view", committed.uses("search-points"))
+    expected = CM * plan_picture(seed.strategy, seed.graph).search_points
+    np.testing.assert_allclose(drawn, expected, atol=2e-3)
