@@ -116,6 +116,9 @@ def test_tap_task_draws_the_tapping_place_and_no_search(tap: Synthesis) -> None:
     # the place is on the surface: inside the outline drawn
     outline = svg.to_data("top-view", svg.path_points("outline"))[:4]
     assert np.all(place[0] > outline.min(axis=0)) and np.all(place[0] < outline.max(axis=0))
+    band = svg.to_data("side-view", svg.path_points("dz-band-after-tap"))
+    np.testing.assert_allclose(np.ptp(band[:, 1]) / 2, CM * strategy.tap.dz_after, atol=2e-3)
+    assert strategy.tap.dz_after < strategy.errors.dz  # the tap is why Δz shrinks (§4.5.2)
     tap_via = svg.to_data("side-view", svg.path_points("height-tap-via"))
     assert tap_via[0, 1] == pytest.approx(2 * 2.54, abs=2e-3)  # 2 in above the surface (L2852)
 

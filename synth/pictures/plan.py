@@ -56,7 +56,9 @@ class PlanPicture:
     offsets the program tries, in order, the first attempt (0, 0) first (empty without a
     search); ``ring_radii`` the search rings; ``tap`` the tapping place ``(x, y)`` and
     ``tap_ring`` the ring of candidate places it came from (M, 2); ``phi`` the pin's rotation
-    about the hole axis at insertion; ``heights`` the side view's levels.
+    about the hole axis at insertion; ``dz`` the certified height error along the axis and
+    ``dz_after_tap`` the same once the tap has measured it (None: no tap); ``heights`` the side
+    view's levels.
     """
 
     task: str
@@ -72,6 +74,7 @@ class PlanPicture:
     tap_ring: NDArray[np.float64]
     phi: float
     dz: float
+    dz_after_tap: float | None
     hole_radius: float
     hole_depth: float
     pin_radius: float
@@ -166,6 +169,7 @@ def plan_picture(strategy: PinInHoleStrategy, graph: AttributeGraph) -> PlanPict
         tap_ring=tap_ring,
         phi=strategy.phi,
         dz=errors.dz,
+        dz_after_tap=None if tap is None else tap.dz_after,
         hole_radius=hole_shape.diameter / 2,
         hole_depth=hole_shape.depth,
         pin_radius=pin_shape.diameter / 2,
@@ -337,6 +341,7 @@ def _side_view(ax: Axes, p: PlanPicture) -> None:
             gid="hole-section",
         )
     )
+    before = " before the tap" if p.dz_after_tap is not None else ""
     ax.axhspan(
         -CM * p.dz,
         CM * p.dz,
@@ -344,8 +349,19 @@ def _side_view(ax: Axes, p: PlanPicture) -> None:
         alpha=0.12,
         lw=0,
         gid="dz-band",
-        label=f"surface height error ±{_cm(p.dz)} (Δz)",
+        label=f"surface height error{before} ±{_cm(p.dz)} (Δz)",
     )
+    if p.dz_after_tap is not None:
+        after = CM * p.dz_after_tap
+        ax.axhspan(
+            -after,
+            after,
+            color="tab:red",
+            alpha=0.35,
+            lw=0,
+            gid="dz-band-after-tap",
+            label=f"after the tap ±{_cm(p.dz_after_tap)}",
+        )
     approach = next(h for h in p.heights if h.name == "approach")
     pin_r = CM * p.pin_radius
     ax.add_patch(
