@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test lint typecheck bench fuzz clean
+.PHONY: demo test lint typecheck bench fuzz clean browser
 
 FUZZ_CASES ?= 1000
 FUZZ_ARGS  ?=
@@ -17,7 +17,8 @@ $(STAMP): pyproject.toml
 
 demo: $(STAMP)
 	mkdir -p out
-	$(BIN)/synth plan fixtures/tasks/seed_4_8.yaml -o out/seed_4_8.al
+	$(BIN)/synth plan fixtures/tasks/seed_4_8.yaml -o out/seed_4_8.al --svg out/seed_4_8_plan.svg
+	$(BIN)/synth view fixtures/tasks/seed_4_8.yaml out/seed_4_8.al -o out/seed_4_8_view.html
 	$(BIN)/synth errors fixtures/tasks/seed_4_8.yaml --from BH1 --to PIN1
 	$(BIN)/synth errors fixtures/tasks/screw_on_driver.yaml --from hole --to tip
 
@@ -28,7 +29,15 @@ lint: $(STAMP)
 typecheck: $(STAMP)
 	$(BIN)/mypy
 
-test: $(STAMP) lint typecheck
+# The browser test of `synth view` renders the page in Debian's headless Chromium: install it when
+# root and missing (tests/test_view_browser.py skips, saying why, where it cannot be installed).
+browser:
+	@command -v chromium >/dev/null 2>&1 || { [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1 \
+	  && { DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends chromium \
+	       || { apt-get update && DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends chromium; }; } \
+	  || echo "chromium not installed: the browser test will skip"; }
+
+test: $(STAMP) lint typecheck browser
 	$(BIN)/python -m pytest
 
 bench: $(STAMP)

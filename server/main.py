@@ -19,7 +19,7 @@ from server.deps import current_settings
 from server.errors import install_error_handlers
 from server.lanes import Lanes
 from server.limits import BodyLimitMiddleware
-from server.routers import health, plans, replays
+from server.routers import health, pictures, plans, replays
 from server.settings import Settings, get_settings
 from server.workers import WorkerPool
 
@@ -68,6 +68,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(health.router)
     app.include_router(plans.router)
     app.include_router(replays.router)
+    app.include_router(pictures.router)
     return app
 
 

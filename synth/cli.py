@@ -17,7 +17,9 @@ from synth.exceptions import SynthError
 from synth.replay.cli_command import (  # light: heavy imports run later
     add_replay_parser,
     add_workers_argument,
+    picture_format,
     resolve_workers,
+    write_output,
 )
 
 EXIT_USAGE = 2
@@ -79,6 +81,8 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     from synth.strategies import PlanOptions
 
     spec = load_task(args.task)
+    if args.svg is not None:
+        picture_format(args.svg)
     if args.proof_trials is not None and args.proof_trials < 0:
         raise SynthError(f"--proof-trials must be 0 or more, got {args.proof_trials}")
     if args.min_success is not None and not 0.0 <= args.min_success <= 1.0:
@@ -97,12 +101,13 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     )
     result = synthesize(spec, options, base_dir=Path(args.task).resolve().parent)
     if args.output is not None:
-        out = Path(args.output)
-        try:
-            out.parent.mkdir(parents=True, exist_ok=True)
-            out.write_text(result.program, encoding="utf-8", newline="\n")
-        except OSError as exc:
-            raise SynthError(f"cannot write {out}: {exc.strerror or exc}") from None
+        write_output(args.output, result.program.encode("utf-8"))
+    if args.svg is not None:
+        from synth.pictures.plan import draw_plan, plan_picture
+        from synth.pictures.render import figure_bytes
+
+        figure = draw_plan(plan_picture(*result.pictured))
+        write_output(args.svg, figure_bytes(figure, picture_format(args.svg)))
     if args.json:
         print(json.dumps(result.to_json(), indent=2))
     else:
@@ -112,6 +117,44 @@ def _cmd_plan(args: argparse.Namespace) -> int:
             print(plan_summary(result.plan, result.proof))
         if args.output is not None:
             print(f"AL program written to {args.output}")
+        if args.svg is not None:
+            print(f"plan picture written to {args.svg}")
+    return 0
+
+
+def _cmd_view(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from synth.models.loader import load_task
+    from synth.pictures.view import view_html, view_scene
+    from synth.replay.run import build_context
+    from synth.replay.trace import record_run
+
+    if args.proof_trials < 0:
+        raise SynthError(f"--proof-trials must be 0 or more, got {args.proof_trials}")
+    base_dir = Path(args.task).resolve().parent
+    spec = load_task(args.task)
+    if args.program is not None:
+        from synth.replay.cli_command import read_program
+
+        text, name = read_program(args.program), args.program
+    else:
+        from synth.pipeline import SynthesisOptions, synthesize
+        from synth.replay.proof import ProofOptions
+
+        proof = ProofOptions.for_task(
+            spec, trials=args.proof_trials, workers=resolve_workers(args.workers)
+        )
+        text = synthesize(spec, SynthesisOptions(proof=proof), base_dir=base_dir).program
+        name = f"{spec.name}.al"
+    context = build_context(text, spec, filename=name, base_dir=base_dir)
+    trace = record_run(context, program=name)
+    write_output(args.output, view_html(view_scene(context, trace, text)).encode("utf-8"))
+    report = trace.report
+    print(
+        f"view of {name} on {spec.name} written to {args.output} "
+        f"(nominal run: {report.outcome}, {report.time:.2f} s, {len(trace.samples)} frames)"
+    )
     return 0
 
 
@@ -161,6 +204,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--output",
         metavar="PROGRAM.al",
         help="write the AL program of the chosen strategy to this file (the summary still prints)",
+    )
+    p.add_argument(
+        "--svg",
+        metavar="PICTURE",
+        help="draw the plan (top view in the hole's frame, side view of the heights) to this "
+        "file: SVG, or PNG when it ends in .png",
     )
     p.add_argument(
         "--preamble",
@@ -216,6 +265,32 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_serve)
 
     add_replay_parser(sub)
+
+    p = sub.add_parser(
+        "view",
+        help="write one offline HTML page: the workcell, the arm and the program's nominal run "
+        "in 3-D, the AL line being executed highlighted",
+    )
+    p.add_argument("task", help="task specification (YAML) with a manipulator")
+    p.add_argument(
+        "program",
+        nargs="?",
+        metavar="PROGRAM.al",
+        help="the AL program to show (default: plan the task and show its program)",
+    )
+    p.add_argument(
+        "-o", "--output", default="view.html", metavar="VIEW.html", help="default: view.html"
+    )
+    p.add_argument(
+        "--proof-trials",
+        type=int,
+        default=0,
+        metavar="N",
+        help="Monte Carlo trials of the plan's proof when no program is given (default: 0, "
+        "the nominal replay only)",
+    )
+    add_workers_argument(p, "the proof's trials")
+    p.set_defaults(func=_cmd_view)
     return parser
 
 

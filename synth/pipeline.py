@@ -122,6 +122,11 @@ class Synthesis(_Proven):
     plan: PlanResult
 
     @property
+    def pictured(self) -> tuple[PinInHoleStrategy, AttributeGraph]:
+        """The strategy and world the plan picture draws: the chosen one."""
+        return self.plan.strategy, self.graph
+
+    @property
     def strategy(self) -> PinInHoleStrategy:
         """The chosen strategy."""
         return self.plan.strategy
@@ -148,6 +153,12 @@ class SequenceSynthesis(_Proven):
     """A proven assembly sequence: its plan, the one program and that program's proof."""
 
     sequence: SequencePlan
+
+    @property
+    def pictured(self) -> tuple[PinInHoleStrategy, AttributeGraph]:
+        """The strategy and world the plan picture draws: the first step's, in its world."""
+        first = self.sequence.steps[0]
+        return first.strategy, believed_graph(first.task)
 
     def to_json(self) -> dict[str, Any]:
         """``synth plan --json`` of a sequence: one record per step, the program, the proof."""

@@ -19,7 +19,8 @@ import json
 import os
 import sys
 import time
-from typing import Any, TextIO
+from pathlib import Path
+from typing import Any, Literal, TextIO
 
 from synth.exceptions import SynthError
 
@@ -29,8 +30,11 @@ __all__ = [
     "add_replay_parser",
     "add_workers_argument",
     "available_cores",
+    "picture_format",
+    "read_program",
     "resolve_workers",
     "run_replay",
+    "write_output",
 ]
 
 DEFAULT_TRIALS = 100
@@ -104,6 +108,26 @@ def resolve_workers(value: int | None, *, stream: TextIO | None = None) -> int:
     return workers
 
 
+def picture_format(path: str) -> Literal["svg", "png"]:
+    """The format a picture's file name asks for; a usage error unless ``.svg`` or ``.png``."""
+    lower = path.lower()
+    if lower.endswith(".svg"):
+        return "svg"
+    if lower.endswith(".png"):
+        return "png"
+    raise SynthError(f"{path}: a picture must end in .svg or .png")
+
+
+def write_output(path: str, data: bytes) -> None:
+    """Write an output file (its directory made as needed); a usage error when it cannot."""
+    out = Path(path)
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_bytes(data)
+    except OSError as exc:
+        raise SynthError(f"cannot write {out}: {exc.strerror or exc}") from None
+
+
 def add_replay_parser(sub: Any) -> None:
     """Add the ``replay`` subcommand to ``synth``'s subparsers."""
     p = sub.add_parser(
@@ -134,6 +158,25 @@ def add_replay_parser(sub: Any) -> None:
         help="print the task's world binding as AL declarations and exit",
     )
     p.add_argument(
+        "--svg",
+        metavar="PICTURE",
+        help="draw the trials' sampled errors, coloured by outcome, failing trials labelled by "
+        "AL line and kind, to this file (SVG, or PNG when it ends in .png)",
+    )
+    p.add_argument(
+        "--trace",
+        metavar="TRACE.json",
+        help="record the nominal run (or --trial I) to this JSON file: time, joints, hand and "
+        "pin poses, events with their AL lines (docs/trace.md)",
+    )
+    p.add_argument(
+        "--trial",
+        type=int,
+        default=None,
+        metavar="I",
+        help="with --trace: record Monte Carlo trial I of --seed instead of the nominal run",
+    )
+    p.add_argument(
         "--progress",
         action="store_true",
         help="draw the progress bar on stderr even when it is not a terminal",
@@ -141,8 +184,11 @@ def add_replay_parser(sub: Any) -> None:
     p.set_defaults(func=run_replay)
 
 
-def _read_program(path: str) -> str:
-    """The program file's text; a byte that is not UTF-8 is reported at its line:column."""
+def read_program(path: str) -> str:
+    """The program file's text; a usage error when it cannot be read.
+
+    A byte that is not UTF-8 is reported at its line:column.
+    """
     try:
         with open(path, "rb") as f:
             raw = f.read()
@@ -166,6 +212,27 @@ def _read_program(path: str) -> str:
         ) from None
 
 
+def _write_montecarlo(args: argparse.Namespace, report: Any) -> None:
+    from synth.models.loader import load_task
+    from synth.pictures.montecarlo import draw_montecarlo, montecarlo_picture
+    from synth.pictures.render import figure_bytes
+    from synth.replay.run import replay_graph, world_errors
+
+    graph = replay_graph(load_task(args.task), args.distribution)
+    errors = [world_errors(graph, args.seed, i) for i in range(len(report.trials))]
+    figure = draw_montecarlo(montecarlo_picture(report, errors, graph))
+    write_output(args.svg, figure_bytes(figure, picture_format(args.svg)))
+
+
+def _write_trace(args: argparse.Namespace, text: str) -> None:
+    from synth.replay.run import build_context
+    from synth.replay.trace import record_run
+
+    context = build_context(text, args.task, filename=args.program, distribution=args.distribution)
+    trace = record_run(context, trial=args.trial, seed=args.seed, program=args.program)
+    write_output(args.trace, (json.dumps(trace.to_json()) + "\n").encode("utf-8"))
+
+
 def run_replay(args: argparse.Namespace) -> int:
     """Run ``synth replay`` with parsed ``args``; the exit code (see the module docstring)."""
     from synth.models.loader import load_task
@@ -181,7 +248,13 @@ def run_replay(args: argparse.Namespace) -> int:
     if args.trials < 0:
         raise SynthError(f"--trials must be 0 or more, got {args.trials}")
     workers = resolve_workers(args.workers)
-    text = _read_program(args.program)
+    if args.svg is not None:
+        picture_format(args.svg)
+        if args.trials == 0:
+            raise SynthError("--svg draws the Monte Carlo trials: give --trials 1 or more")
+    if args.trial is not None and (args.trace is None or args.trial < 0):
+        raise SynthError("--trial I records trial I ≥ 0 and needs --trace TRACE.json")
+    text = read_program(args.program)
 
     from synth.replay.report import replay_summary
     from synth.replay.run import replay
@@ -202,12 +275,21 @@ def run_replay(args: argparse.Namespace) -> int:
     finally:
         if bar is not None:
             bar.close()
+    if args.svg is not None:
+        _write_montecarlo(args, report)
+    if args.trace is not None:
+        _write_trace(args, text)
     if args.json:
         print(json.dumps(report.to_json(), indent=2))
     else:
         print(replay_summary(report))
         if args.distribution is not None and args.trials:
             print(f"  errors: every block sampled {args.distribution} (--distribution)")
+        if args.svg is not None:
+            print(f"Monte Carlo picture written to {args.svg}")
+        if args.trace is not None:
+            which = "nominal run" if args.trial is None else f"trial {args.trial}"
+            print(f"trace of the {which} written to {args.trace}")
     if report.ok:
         return 0
     return 2 if report.nominal.outcome == "error" else 1

@@ -111,6 +111,7 @@ from synth.replay.contact import first_contact, guided_motion, scrape
 from synth.replay.motion import (
     Checkpoint,
     Motion,
+    MotionObserver,
     MotionState,
     Phase,
     Segment,
@@ -126,7 +127,7 @@ from synth.replay.report import Violation, ViolationKind
 from synth.replay.truth import HandErrors
 from synth.replay.wedging import wedging_onset
 
-__all__ = ["PinState", "ReplayMachine", "ReplayOptions", "ViolationStop"]
+__all__ = ["PinState", "ReplayMachine", "ReplayOptions", "ViolationStop", "configuration_of"]
 
 
 @dataclass(frozen=True)
@@ -200,13 +201,28 @@ class PinState:
 # The machine
 
 
+def configuration_of(arm: Arm, state: MotionState) -> NDArray[np.float64]:
+    """The arm's joints [rad, m] in ``state``.
+
+    The path's, or where the arm complied (the pin guided by a hole or sliding) the inverse of
+    the sensed hand nearest the path's.
+    """
+    if state.q is not None:
+        return state.q.copy()
+    try:
+        return solve_near(arm, state.sensed, state.hint)
+    except ReachProblem:
+        return state.hint.copy()  # complied a hair beyond the model: keep the path
+
+
 class ReplayMachine(MotionGate):
     """The Machine protocol on ``arm`` in a true ``workcell`` (see the module docstring).
 
     ``hand_errors`` is the stream of hand positioning errors (:class:`HandErrors.none` for the
     nominal run); ``q_start`` the arm's initial configuration (the hand at the task's park
     frame). Every violation is kept in :attr:`violations` before :class:`ViolationStop` is
-    raised.
+    raised. ``observer`` (None: nobody) is told how far each motion has been played, on the
+    machine's own timeline (:class:`~synth.replay.motion.MotionObserver`).
     """
 
     def __init__(
@@ -245,6 +261,7 @@ class ReplayMachine(MotionGate):
         hand_frame = arm.model.frames[arm.hand_frame]
         self._hand_joint = int(hand_frame.parentJoint)
         self._joint_from_hand = hand_frame.placement
+        self.observer: MotionObserver | None = None
 
     # ---- sensors
 
@@ -384,13 +401,7 @@ class ReplayMachine(MotionGate):
         return MotionState(None, q, sensed, error, pose, hole, depth, self._opening)
 
     def _apply(self, state: MotionState) -> None:
-        if state.q is not None:
-            self._q = state.q.copy()
-        else:
-            try:
-                self._q = solve_near(self.arm, state.sensed, state.hint)
-            except ReachProblem:
-                self._q = state.hint.copy()  # complied a hair beyond the model: keep the path
+        self._q = configuration_of(self.arm, state)
         self._sensed = pin.SE3(state.sensed)
         self._error = pin.SE3(state.error)
         held = self.held_pin()
@@ -1062,6 +1073,8 @@ class ReplayMachine(MotionGate):
 
     def _show(self, motion: Motion, checkpoint: Checkpoint, state: MotionState) -> None:
         """Present the paused instant: clock, hand reading, opening and sensed force."""
+        if self.observer is not None:
+            self.observer.played(motion, checkpoint.elapsed, True)
         self._time = motion.start_time + checkpoint.elapsed
         self._sensed = pin.SE3(state.sensed)
         self._opening = state.opening
@@ -1070,6 +1083,8 @@ class ReplayMachine(MotionGate):
 
     def _settle(self, motion: Motion, elapsed: float) -> None:
         """End the motion ``elapsed`` [s] after it started: the arm, hand and pin stay there."""
+        if self.observer is not None:
+            self.observer.played(motion, elapsed, False)
         state = motion.state_at(elapsed)
         self._time = motion.start_time + elapsed
         self._apply(state)

@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Literal, Protocol
 
 import numpy as np
 import pinocchio as pin
@@ -28,6 +28,7 @@ from synth.replay.report import Violation
 __all__ = [
     "Checkpoint",
     "Motion",
+    "MotionObserver",
     "MotionState",
     "Phase",
     "Segment",
@@ -200,6 +201,18 @@ class Motion:
     cursor: int = 0
     fired: set[int] = field(default_factory=set)
     detected: bool = False
+
+
+class MotionObserver(Protocol):
+    """Told how far each motion has been played: the hook of :mod:`synth.replay.trace`."""
+
+    def played(self, motion: Motion, elapsed: float, paused: bool) -> None:
+        """``motion`` has been played up to ``elapsed`` [s] after its start.
+
+        ``paused``: a monitor fired and the motion may resume; otherwise it has ended there.
+        Called before the machine takes on the state at ``elapsed``; ``motion.state_at`` gives
+        every instant up to there.
+        """
 
 
 def segment_times(durations: list[float], constraints: Sequence[MotionConstraint]) -> list[float]:

@@ -58,6 +58,7 @@ __all__ = [
     "build_context",
     "machine_for",
     "replay",
+    "replay_graph",
     "replay_program",
     "run_machine",
     "run_nominal",
@@ -66,6 +67,8 @@ __all__ = [
     "summarise",
     "trial_errors",
     "trial_seed",
+    "trial_world",
+    "world_errors",
 ]
 
 Progress = Callable[[int, int], None]
@@ -119,12 +122,11 @@ def build_context(
         raise SpecError("manipulator", "the replay needs the task's manipulator (arm and park)")
     arm = manipulator_arm(manipulator, base_dir)
     park = pose_to_se3(manipulator.park.pose)
-    graph = believed_graph(spec)  # a fixture-held box: where its contacts put it
+    believed = believed_graph(spec)  # a fixture-held box: where its contacts put it
     q_park = park_configuration(
-        arm, park, nominal_environment(graph, arm), manipulator.park.al_name
+        arm, park, nominal_environment(believed, arm), manipulator.park.al_name
     )
-    if distribution is not None:
-        graph = AttributeGraph(graph.spec.with_distribution(distribution))
+    graph = replay_graph(spec, distribution, believed)
     return ReplayContext(
         program=program,
         spec=graph.spec,
@@ -136,6 +138,21 @@ def build_context(
         q_park=q_park,
         options=options or ReplayOptions(),
     )
+
+
+def replay_graph(
+    spec: TaskSpec,
+    distribution: Distribution | None = None,
+    believed: AttributeGraph | None = None,
+) -> AttributeGraph:
+    """The graph trials sample from: the believed one, every block's distribution replaced.
+
+    ``believed`` is :func:`~synth.errors.locate.believed_graph` of ``spec`` when already built.
+    """
+    graph = believed if believed is not None else believed_graph(spec)
+    if distribution is not None:
+        graph = AttributeGraph(graph.spec.with_distribution(distribution))
+    return graph
 
 
 def machine_for(context: ReplayContext, world: TrueWorld, hand_errors: HandErrors) -> ReplayMachine:
@@ -207,14 +224,19 @@ def trial_seed(seed: int, index: int) -> np.random.SeedSequence:
     return np.random.SeedSequence(seed, spawn_key=(index,))
 
 
-def run_trial(context: ReplayContext, seed: int, index: int) -> RunReport:
-    """Monte Carlo trial ``index``: a sampled world and hand errors from :func:`trial_seed`."""
+def trial_world(context: ReplayContext, seed: int, index: int) -> tuple[TrueWorld, HandErrors]:
+    """Trial ``index``'s sampled world and hand errors, from :func:`trial_seed`."""
     world_seed, hand_seed = trial_seed(seed, index).spawn(2)
     world = sample_world(context.graph, np.random.default_rng(world_seed))
     manipulator = context.spec.manipulator
     assert manipulator is not None
     hand = HandErrors(manipulator.hand_error, np.random.default_rng(hand_seed))
-    return run_world(context, world, hand)
+    return world, hand
+
+
+def run_trial(context: ReplayContext, seed: int, index: int) -> RunReport:
+    """Monte Carlo trial ``index``: a sampled world and hand errors from :func:`trial_seed`."""
+    return run_world(context, *trial_world(context, seed, index))
 
 
 def summarise(runs: Iterable[RunReport], seed: int) -> MonteCarloReport:
@@ -235,8 +257,13 @@ def trial_errors(context: ReplayContext, seed: int, index: int) -> dict[str, dic
     The same draw as :func:`run_trial` (the world's stream of :func:`trial_seed`), so a failing
     trial can be reported with the errors that made it fail.
     """
+    return world_errors(context.graph, seed, index)
+
+
+def world_errors(graph: AttributeGraph, seed: int, index: int) -> dict[str, dict[str, float]]:
+    """:func:`trial_errors` from the sampled graph alone (:func:`replay_graph`), no arm built."""
     world_seed, _ = trial_seed(seed, index).spawn(2)
-    world = sample_world(context.graph, np.random.default_rng(world_seed))
+    world = sample_world(graph, np.random.default_rng(world_seed))
     return {frame: dict(values) for frame, values in world.parameters.items()}
 
 

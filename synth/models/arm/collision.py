@@ -121,6 +121,22 @@ class Clearance:
     pair: Pair | None
 
 
+def body_at_opening(arm: Arm, body: Body, opening: float) -> Body:
+    """``body`` with the fingers at ``opening`` [m] (any other body as it is).
+
+    An arm's finger bodies stand at full opening; at opening w each slides back (w − w_max)/2
+    along the hand's x, towards the other (parametric or URDF fingers).
+    """
+    if body.name not in FINGERS:
+        return body
+    joint_from_hand = arm.model.frames[arm.hand_frame].placement
+    side = -1.0 if body.name == FINGERS[0] else 1.0
+    shift = side * (opening - arm.hand.max_opening) / 2
+    slide = pin.SE3(np.eye(3), np.array([shift, 0.0, 0.0]))
+    placement = joint_from_hand * slide * joint_from_hand.inverse() * body.placement
+    return Body(body.name, body.joint, body.link, placement, body.geometry, body.role)
+
+
 class CollisionScene:
     """Arm + hand + held object + environment, with the checked pair set fixed at construction.
 
@@ -201,20 +217,11 @@ class CollisionScene:
         )
 
     def _bodies(self) -> list[Body]:
-        arm, hand = self.arm, self.arm.hand
+        arm = self.arm
         hand_frame = arm.model.frames[arm.hand_frame]
         bodies = []
-        # An arm's finger bodies stand at full opening; at opening w each slides back
-        # (w − w_max)/2 along the hand's x, towards the other (parametric or URDF fingers).
-        joint_from_hand = hand_frame.placement
         for body in arm.bodies:
-            if body.name in FINGERS:
-                side = -1.0 if body.name == FINGERS[0] else 1.0
-                shift = side * (self.opening - hand.max_opening) / 2
-                slide = pin.SE3(np.eye(3), np.array([shift, 0.0, 0.0]))
-                placement = joint_from_hand * slide * joint_from_hand.inverse() * body.placement
-                body = Body(body.name, body.joint, body.link, placement, body.geometry, body.role)
-            bodies.append(body)
+            bodies.append(body_at_opening(arm, body, self.opening))
         if self.held is not None:
             placement = hand_frame.placement * self.held.transform_hand_object
             bodies.append(

@@ -1,0 +1,159 @@
+"""``synth view``: the page renders in headless Chromium, the arm where the camera puts it.
+
+The screenshot's pixels are checked against the scene's own camera (:func:`project`): the hand
+at the frozen time ``?t=…`` (the trace's pose) projects onto arm-coloured pixels; two times give
+different pictures; the DOM after the script ran highlights the trace's AL line at that time.
+Chromium comes from Debian's package (``make test`` installs it when root); without it the
+browser tests skip, saying why.
+"""
+
+from __future__ import annotations
+
+import bisect
+import os
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+from _tasks import FIXTURES, synthesized
+from PIL import Image
+
+from synth.cli import main
+from synth.pictures.view import CANVAS, Camera, project, view_html, view_scene
+from synth.replay.run import build_context
+from synth.replay.trace import Trace, record_run
+
+TASK = FIXTURES / "seed_4_8.yaml"
+WINDOW = (CANVAS[0] + 360, CANVAS[1])
+
+
+def find_chromium() -> str | None:
+    """The Chromium binary; installed from Debian's packages when root and missing."""
+    found = shutil.which("chromium") or shutil.which("chromium-browser")
+    if found or os.name != "posix" or os.geteuid() != 0 or not shutil.which("apt-get"):
+        return found
+    env = {**os.environ, "DEBIAN_FRONTEND": "noninteractive"}
+    install = ["apt-get", "install", "-y", "--no-install-recommends", "chromium"]
+    for commands in ([install], [["apt-get", "update"], install]):
+        for command in commands:
+            subprocess.run(command, env=env, capture_output=True, timeout=1200, check=False)
+        if shutil.which("chromium"):
+            return shutil.which("chromium")
+    return None
+
+
+@pytest.fixture(scope="module")
+def chromium() -> str:
+    binary = find_chromium()
+    if binary is None:
+        pytest.skip(
+            "headless Chromium is not installed and cannot be installed here "
+            "(needs root and apt-get: `apt-get install -y chromium`)"
+        )
+    return binary
+
+
+@pytest.fixture(scope="module")
+def page(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict, Trace]:
+    program = synthesized(TASK).program
+    context = build_context(program, TASK)
+    trace = record_run(context, program="seed.al")
+    scene = view_scene(context, trace, program)
+    path = tmp_path_factory.mktemp("view") / "view.html"
+    path.write_text(view_html(scene), encoding="utf-8")
+    return path, scene, trace
+
+
+def browse(chromium: str, url: str, tmp: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    flags = [
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--no-first-run",
+        f"--user-data-dir={tmp / 'profile'}",
+        "--use-angle=swiftshader",
+        "--enable-unsafe-swiftshader",
+        "--hide-scrollbars",
+        f"--window-size={WINDOW[0]},{WINDOW[1]}",
+    ]
+    return subprocess.run(
+        [chromium, *flags, *args, url], capture_output=True, text=True, timeout=120, check=False
+    )
+
+
+def screenshot(chromium: str, page: Path, t: float, tmp: Path) -> np.ndarray:
+    out = tmp / f"shot_{t}.png"
+    result = browse(chromium, f"{page.as_uri()}?t={t}", tmp, f"--screenshot={out}")
+    assert out.exists(), result.stderr[-2000:]
+    return np.asarray(Image.open(out).convert("RGB"), dtype=int)
+
+
+def sample_at(trace: Trace, t: float) -> int:
+    times = [s.t for s in trace.samples]
+    return max(0, bisect.bisect_right(times, t) - 1)
+
+
+def arm_pixels(image: np.ndarray, column: float, row: float, half: int = 14) -> int:
+    """Pixels of the arm's blues (COLOURS arm / hand) in a window about (column, row)."""
+    c, r = round(column), round(row)
+    window = image[max(r - half, 0) : r + half, max(c - half, 0) : c + half]
+    red, green, blue = window[..., 0], window[..., 1], window[..., 2]
+    return int(np.count_nonzero((blue > red + 40) & (blue > green + 20)))
+
+
+def test_the_arm_is_drawn_where_the_camera_puts_its_hand(chromium, page, tmp_path) -> None:
+    path, scene, trace = page
+    camera = Camera(
+        **{k: tuple(v) if isinstance(v, list) else v for k, v in scene["camera"].items()}
+    )
+    shots = {}
+    for t in (0.5, 3.5):
+        image = screenshot(chromium, path, t, tmp_path)
+        assert image.shape[:2] == (WINDOW[1], WINDOW[0])
+        shots[t] = image[:, : CANVAS[0]]
+        hand = trace.samples[sample_at(trace, t)].hand
+        # a point 3 cm back along the hand's approach axis: inside the wrist, not between pads
+        wrist = hand.act(np.array([0.0, 0.0, -0.03]))
+        column, row = project(camera, wrist)
+        assert 0 <= column < CANVAS[0] and 0 <= row < CANVAS[1]
+        assert arm_pixels(shots[t], column, row) > 50, (t, column, row)
+        background = np.array([0xF4, 0xF4, 0xF4])
+        assert np.count_nonzero(np.all(shots[t] == background, axis=-1)) > 1000  # not all arm
+    changed = np.any(np.abs(shots[0.5] - shots[3.5]) > 30, axis=-1)
+    assert changed.mean() > 0.01
+    # the hand moved on screen between the two times: its projections are apart
+    a = project(camera, trace.samples[sample_at(trace, 0.5)].hand.translation)
+    b = project(camera, trace.samples[sample_at(trace, 3.5)].hand.translation)
+    assert np.hypot(a[0] - b[0], a[1] - b[1]) > 30
+
+
+def test_the_page_highlights_the_line_being_executed(chromium, page, tmp_path) -> None:
+    path, _, trace = page
+    for t in (1.0, 3.5):
+        result = browse(chromium, f"{path.as_uri()}?t={t}", tmp_path, "--dump-dom")
+        body = re.search(r"<body([^>]*)>", result.stdout)
+        assert body is not None, result.stderr[-2000:]
+        line = trace.samples[sample_at(trace, t)].line
+        assert f'data-line="{line}"' in body.group(1) and 'data-ready="1"' in body.group(1)
+        rows = re.findall(r'<div data-line="(\d+)" class="current">', result.stdout)
+        assert rows == [str(line)]
+
+
+def test_the_page_is_self_contained(page) -> None:
+    html = page[0].read_text(encoding="utf-8")
+    assert not re.search(r"<(script|link|img)[^>]+(src|href)=", html)
+    assert "WebGLRenderer" in html and "Three.js Authors" in html  # three.js inlined, licence
+
+
+def test_cli_writes_the_view(tmp_path: Path) -> None:
+    al = tmp_path / "seed.al"
+    al.write_text(synthesized(TASK).program, encoding="utf-8")
+    out = tmp_path / "v" / "view.html"
+    assert main(["view", str(TASK), str(al), "-o", str(out)]) == 0
+    assert "synth view" in out.read_text(encoding="utf-8")
+    assert main(["view", str(TASK), str(tmp_path / "missing.al"), "-o", str(out)]) == 2
