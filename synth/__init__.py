@@ -12,7 +12,8 @@ The pipeline as a Python API (``docs/python-api.md``); each name is imported on 
   :class:`Synthesis` (or :class:`SequenceSynthesis` for several insertions);
 * :func:`believed_graph`, :func:`plan_task` (→ :class:`PlanResult`, its
   :class:`PinInHoleStrategy`), :func:`emit_program` — the stages one by one;
-* :func:`replay` (→ :class:`ReplayReport`) — run AL text on the task's simulated arm;
+* :func:`replay_program` (→ :class:`ReplayReport`) — run AL text on the task's simulated arm
+  (:func:`synth.replay.run.replay`; ``synth.replay`` itself is the replay's package);
 * :func:`export_trajectory` — the nominal run's joint trajectory (ROS YAML or CSV);
 * :class:`SynthError` — the base of every error a user can cause.
 """
@@ -41,7 +42,7 @@ _API: dict[str, str] = {
     "emit_program": "synth.codegen.emitter",
     "ProofOptions": "synth.replay.proof",
     "Proof": "synth.replay.proof",
-    "replay": "synth.replay.run",
+    "replay_program": "synth.replay.run",
     "ReplayReport": "synth.replay.report",
     "RunReport": "synth.replay.report",
     "export_trajectory": "synth.replay.trajectory",
@@ -74,7 +75,7 @@ __all__ = [
     "export_trajectory",
     "load_task",
     "plan_task",
-    "replay",
+    "replay_program",
     "synthesize",
 ]
 
@@ -93,7 +94,7 @@ if TYPE_CHECKING:
     )
     from synth.replay.proof import Proof, ProofOptions
     from synth.replay.report import ReplayReport, RunReport
-    from synth.replay.run import replay
+    from synth.replay.run import replay_program
     from synth.replay.trajectory import Trajectory, export_trajectory
     from synth.strategies.options import PlanOptions
     from synth.strategies.planner import plan_task
