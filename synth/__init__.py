@@ -21,7 +21,8 @@ The pipeline as a Python API (``docs/python-api.md``); each name is imported on 
 from __future__ import annotations
 
 import importlib
-from typing import TYPE_CHECKING, Any
+
+TYPE_CHECKING = False  # not typing's: ``import synth`` stays free of ``typing`` (mypy knows it)
 
 __version__ = "0.1.0"
 
@@ -80,6 +81,8 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:
+    from typing import Any
+
     from synth.codegen.emitter import emit_program
     from synth.errors.locate import believed_graph
     from synth.exceptions import NoStrategyError, SpecError, SynthError
