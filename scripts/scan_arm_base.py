@@ -176,7 +176,7 @@ def replays(x: float, y: float, yaw: float, arm_model: str = "stanford") -> dict
             # The pipeline writes only a program whose nominal replay succeeds (else it raises).
             synthesis = synthesize(spec, NOMINAL_PROOF, base_dir=TASKS_DIR)
             strategy = synthesis.strategy
-            out["planned"][task] = f"{strategy.name}, {strategy.goodness:.2f} s"
+            out["planned"][task] = f"{strategy.name}, {strategy.expected_time:.2f} s"
     except SynthError as exc:  # the first line: a refusal's root cause
         out["failure"] = f"{type(exc).__name__}: {str(exc).splitlines()[0]}"
     return out

@@ -1,8 +1,12 @@
 """Command line: ``synth errors``, ``synth locate``, … — parsing, I/O and printing only.
 
-Every :class:`~synth.exceptions.SynthError` becomes one line on stderr and exit code 2; a usage
-error from argparse also exits 2. Unexpected failures print one line too (exit 70) unless
-``SYNTH_DEBUG=1`` asks for the traceback.
+Exit codes (listed in ``synth --help``): 0 success; 1 a replay whose nominal run fails
+(``synth replay``); 2 unusable input or a refusal — every :class:`~synth.exceptions.SynthError`
+(one line on stderr, e.g. no strategy proven) and argparse's usage errors; 70 an internal error
+(one line too, unless ``SYNTH_DEBUG=1`` asks for the traceback); 130 interrupted.
+
+``-o -`` (``synth plan``) writes the program to standard output; the summary then goes to
+standard error, so standard output carries the program alone.
 """
 
 from __future__ import annotations
@@ -15,6 +19,8 @@ from collections.abc import Callable, Sequence
 
 from synth.exceptions import SynthError
 from synth.replay.cli_command import (  # light: heavy imports run later
+    BAR_MIN_TRIALS,
+    ProgressBar,
     add_replay_parser,
     add_workers_argument,
     picture_format,
@@ -22,8 +28,20 @@ from synth.replay.cli_command import (  # light: heavy imports run later
     write_output,
 )
 
+EXIT_OK = 0
+EXIT_REPLAY_FAILED = 1
 EXIT_USAGE = 2
 EXIT_INTERNAL = 70
+EXIT_INTERRUPTED = 130
+
+EXIT_CODES_HELP = f"""exit codes:
+  {EXIT_OK}   success
+  {EXIT_REPLAY_FAILED}   synth replay: the program's nominal run failed (abort, violation, pin
+      not seated)
+  {EXIT_USAGE}   unusable input or a refusal: bad arguments, an invalid task or program, no
+      strategy proven (synth plan), an AL runtime error (synth replay)
+  {EXIT_INTERNAL}  internal error (SYNTH_DEBUG=1 prints the traceback)
+  {EXIT_INTERRUPTED} interrupted"""
 DEFAULT_PROOF_TRIALS = 100
 """Proof trials of ``synth plan`` (kept equal to :data:`synth.replay.proof.DEFAULT_PROOF_TRIALS`
 by a test; the CLI does not import the replay to print its help)."""
@@ -99,8 +117,25 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         ),
         preamble=args.preamble,
     )
-    result = synthesize(spec, options, base_dir=Path(args.task).resolve().parent)
-    if args.output is not None:
+    to_stdout = args.output == "-"
+    show = options.proof is not None and options.proof.trials >= BAR_MIN_TRIALS
+    show = show and (args.progress or sys.stderr.isatty())
+    bar = ProgressBar(sys.stderr, label="proof") if show else None
+    try:
+        result = synthesize(
+            spec,
+            options,
+            base_dir=Path(args.task).resolve().parent,
+            progress=None if bar is None else (lambda _name, done, total: bar(done, total)),
+        )
+    finally:
+        if bar is not None:
+            bar.close()
+    summary = sys.stderr if to_stdout else sys.stdout
+    if to_stdout:
+        sys.stdout.write(result.program)
+        sys.stdout.flush()
+    elif args.output is not None:
         write_output(args.output, result.program.encode("utf-8"))
     if args.svg is not None:
         from synth.pictures.plan import draw_plan, plan_picture
@@ -109,16 +144,19 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         figure = draw_plan(plan_picture(*result.pictured))
         write_output(args.svg, figure_bytes(figure, picture_format(args.svg)))
     if args.json:
-        print(json.dumps(result.to_json(), indent=2))
+        print(json.dumps(result.to_json(), indent=2), file=summary)
     else:
         if isinstance(result, SequenceSynthesis):
-            print(sequence_summary(result.sequence, result.proof))
+            text = sequence_summary(result.sequence, result.proof, verbose=args.verbose)
         else:
-            print(plan_summary(result.plan, result.proof))
-        if args.output is not None:
-            print(f"AL program written to {args.output}")
+            text = plan_summary(
+                result.plan, result.proof, records=args.records, verbose=args.verbose
+            )
+        print(text, file=summary)
+        if args.output is not None and not to_stdout:
+            print(f"AL program written to {args.output}", file=summary)
         if args.svg is not None:
-            print(f"plan picture written to {args.svg}")
+            print(f"plan picture written to {args.svg}", file=summary)
     return 0
 
 
@@ -158,12 +196,27 @@ def _cmd_view(args: argparse.Namespace) -> int:
     return 0
 
 
+def _version() -> str:
+    """The installed package's version (the source tree's when synth is not installed)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("synth")
+    except PackageNotFoundError:  # pragma: no cover - run from a source tree
+        from synth import __version__
+
+        return __version__
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``synth`` command."""
     parser = argparse.ArgumentParser(
         prog="synth",
         description="Task-level synthesis of AL pin-in-hole programs (after Taylor, 1976).",
+        epilog=EXIT_CODES_HELP,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     p = sub.add_parser("errors", help="bound the run-time error of one frame relative to another")
@@ -203,7 +256,23 @@ def build_parser() -> argparse.ArgumentParser:
         "-o",
         "--output",
         metavar="PROGRAM.al",
-        help="write the AL program of the chosen strategy to this file (the summary still prints)",
+        help="write the AL program of the chosen strategy to this file (the summary still "
+        "prints); '-': to standard output, the summary then going to standard error",
+    )
+    p.add_argument(
+        "--records",
+        action="store_true",
+        help="also print the chosen strategy's record in the seed's PHL SPEC layout",
+    )
+    p.add_argument(
+        "--verbose",
+        action="store_true",
+        help="keep the seed's line references (seed Lnnnn) in the summary",
+    )
+    p.add_argument(
+        "--progress",
+        action="store_true",
+        help="draw the proof's progress bar on stderr even when it is not a terminal",
     )
     p.add_argument(
         "--svg",
@@ -306,7 +375,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_USAGE
     except KeyboardInterrupt:
         print("synth: interrupted", file=sys.stderr)
-        return 130
+        return EXIT_INTERRUPTED
     except Exception as exc:
         if os.environ.get("SYNTH_DEBUG"):
             raise

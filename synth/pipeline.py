@@ -169,7 +169,7 @@ class SequenceSynthesis(_Proven):
                 "step": s.index + 1,
                 "pin": s.insertion.pin,
                 "hole": s.insertion.hole,
-                "time": s.time,
+                "expected_time": s.time,
                 "strategy": s.strategy.to_json(),
                 "errors": None if errors is None else errors.to_json(),
                 "reuse": None,
@@ -179,7 +179,7 @@ class SequenceSynthesis(_Proven):
             elif s.alone is not None:
                 before = s.alone.strategy.errors
                 record["without_reuse"] = {
-                    "time": s.alone.strategy.goodness,
+                    "expected_time": s.alone.strategy.expected_time,
                     "errors": None if before is None else before.to_json(),
                     "search": s.alone.strategy.search is not None,
                     "tap": s.alone.strategy.tap is not None,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
@@ -206,6 +207,8 @@ def strategy_spec(s: PinInHoleStrategy) -> list[str]:
     """A strategy in the layout of the seed's "PHL SPEC" printouts (L2600–2710).
 
     Lengths in cm, angles in degrees (the seed's ``PH FP ROT`` was in radians), times in s.
+    Each time carries its plain name in brackets (``docs/glossary.md``), since the seed calls
+    two different sums GOODNESS.
     """
     g = s.pickup
     lines = [
@@ -219,13 +222,13 @@ def strategy_spec(s: PinInHoleStrategy) -> list[str]:
         f"  GRASP: {_destination(g.grasp_point)}",
         "  GRASP DETERM: " + ("NILTRANS" if g.grasp_determination is None else "see record"),
         f"  DEPARTURE POINT: {_destination(g.departure_point)}",
-        f"  GOODNESS: {g.goodness:.3g}",
+        f"  GOODNESS: {g.pickup_time:.3g}  [pickup_time]",
         f"  REMARKS: {g.remarks}",
         f"APPROACH: {_destination(s.approach)}",
         f"DESTINATION: {_destination(s.destination)}",
         f"TARGET: {_destination(s.target)}",
-        f"XPORT TIME: {s.ttime - g.goodness:.3g}",
-        f"GOODNESS: {s.ttime:.3g}",
+        f"XPORT TIME: {s.transport_time:.3g}  [transport_time]",
+        f"GOODNESS: {s.gross_time:.3g}  [gross_time = pickup_time + transport_time]",
     ]
     if s.tap is None:
         lines.append("TAP: NULL_RECORD")
@@ -247,8 +250,8 @@ def strategy_spec(s: PinInHoleStrategy) -> list[str]:
         return lines
     e = s.errors
     lines += [
-        f"FINE TIME: {s.finetime:.3g}",
-        f"TOTAL: {s.goodness:.3g}",
+        f"FINE TIME: {s.fine_time:.3g}  [fine_time]",
+        f"TOTAL: {s.expected_time:.3g}  [expected_time]",
         f"PH DZ: {_num(100 * e.dz)}",
         f"PH FP DX: {_num(100 * e.dx)}",
         f"PH FP DY: {_num(100 * e.dy)}",
@@ -259,33 +262,101 @@ def strategy_spec(s: PinInHoleStrategy) -> list[str]:
     return lines
 
 
-def plan_summary(result: PlanResult, proof: Proof | None = None) -> str:
+_REF = (
+    r"(?:seed\s+(?:L\d+(?:[–-]\d+)?|Eqn\.?\s*\d+(?:\.\d+)*|§\s*\d+(?:\.\d+)*"
+    r"|ch\.\s*[IVX]+(?:\s*§\s*\d+(?:\.\d+)*)?|App\.\s*\d+|A\.\d+)|\bL\d{4}(?:[–-]\d+)?)"
+)
+_REF_ALONE = re.compile(rf"\s*\(\s*{_REF}\s*\)")
+_REF_FIRST = re.compile(rf"\(\s*{_REF}\s*[,;]\s*")
+_REF_AFTER = re.compile(rf"\s*[,;]\s*{_REF}(?=\s*[),;]|\s*$)", re.MULTILINE)
+_REF_ANY = re.compile(rf"\s*{_REF}")
+
+
+def strip_seed_references(text: str) -> str:
+    """``text`` without the seed's line references (``seed L1963``, ``seed Eqn 3.5.1``, ``L2122``).
+
+    The default output of ``synth plan`` is read without the thesis at hand; ``--verbose``
+    keeps the references, and ``docs/glossary.md`` lists them. A parenthesis left empty goes,
+    and so does a separator left dangling: ``(measured, seed L1963)`` → ``(measured)``,
+    ``(seed L2122; --try-harder keeps all)`` → ``(--try-harder keeps all)``.
+    """
+    text = _REF_ALONE.sub("", text)
+    text = _REF_FIRST.sub("(", text)
+    text = _REF_AFTER.sub("", text)
+    return _REF_ANY.sub("", text)
+
+
+def grasp_words(s: PinInHoleStrategy) -> list[str]:
+    """The grasp (ω, γ, d) and the approach (φ), each named once with what it means."""
+    g = s.pickup.grasp
+    return [
+        f"Grasp of {s.pickup.object}: ω = {math.degrees(g.omega):.0f}° (grasp orientation: the "
+        "hand's turn about the pin's axis), "
+        f"γ = {math.degrees(g.gamma):.0f}° (grasp angle: between the hand's approach axis and "
+        f"the pin's axis), d = {100 * g.distance:.2f} cm (grasp distance: from the pin's tip "
+        "along its axis to the fingers' centre)",
+        f"Approach to {s.hole}: φ = {math.degrees(s.phi):.0f}° (the pin's turn about the "
+        f"hole's axis as it goes in), standoff {100 * s.standoff:.2f} cm above the hole, "
+        f"aiming {100 * s.dtry:.2f} cm deep (dtry)",
+    ]
+
+
+def _fine_motion(s: PinInHoleStrategy) -> str:
+    """The fine motion in words: tap and search with their times, or neither."""
+    parts = []
+    if s.tap is not None:
+        parts.append(f"tap on {s.tap.surface}, {s.tap.time:.2f} s")
+    if s.search is not None:
+        parts.append(
+            f"search {s.search.rings} rings {100 * s.search.step:.3g} cm apart, "
+            f"{s.search.expected_points} points expected, {s.search.time:.2f} s"
+        )
+    return "; then ".join(parts) or "no tap, no search"
+
+
+def plan_summary(
+    result: PlanResult,
+    proof: Proof | None = None,
+    *,
+    records: bool = False,
+    verbose: bool = False,
+) -> str:
     """The ``synth plan`` text.
 
-    The chosen strategy, its reasons, its proof (when given), the candidates and rejections.
+    First the decisions, the expected time and the proof in plain words; then the grasp and
+    the approach, the errors at the hole, the candidates and the rejections. ``records`` adds
+    the chosen strategy's record in the seed's PHL SPEC layout (:func:`strategy_spec`);
+    without ``verbose`` the seed's line references are left out
+    (:func:`strip_seed_references`).
     """
     s = result.strategy
     lines = [
-        "Chosen strategy (lengths in cm, angles in degrees, times in s; certified errors):",
-        "",
-        *strategy_spec(s),
+        f"Plan: {s.name} ({_fine_motion(s)}); lengths in cm, angles in degrees, times in s",
         "",
         "Decisions:",
         *(f"  - {d}" for d in s.decisions),
         "",
-        f"Estimated time {s.goodness:.2f} s = pickup {s.pickup.goodness:.2f} + transport "
-        f"{s.ttime - s.pickup.goodness:.2f} + fine {s.finetime:.2f}",
+        f"Expected time {s.expected_time:.2f} s = pickup {s.pickup_time:.2f} + transport "
+        f"{s.transport_time:.2f} + fine {s.fine_time:.2f}",
     ]
-    if s.errors is not None:
-        fo = s.errors.first_order
-        lines.append(
-            "First order (seed Eqn 3.5.1): "
-            f"Δx {_num(100 * fo.get('dx', math.nan))}, Δy {_num(100 * fo.get('dy', math.nan))}, "
-            f"Δz {_num(100 * fo.get('dz', math.nan))}, "
-            f"Δθ {_num(math.degrees(fo.get('dtheta', math.nan)))} deg"
-        )
     if proof is not None:
-        lines += ["", f"Proof: {proof.summary()}"]
+        lines.append(f"Proof: {proof.summary()}")
+    lines += ["", *grasp_words(s)]
+    if s.errors is not None:
+        e = s.errors
+        fo = e.first_order
+        lines += [
+            f"Errors at the hole (certified): footprint ±{_num(100 * e.dx)} × "
+            f"±{_num(100 * e.dy)} cm turned ζ = {_num(math.degrees(e.zeta))}° about the hole's "
+            f"axis, depth Δz ±{_num(100 * e.dz)} cm, tilt Δθ {_num(math.degrees(e.dtheta))}°; "
+            f"a miss is told by |DISTANCE_OFF| > {_num(100 * s.success_threshold)} cm",
+            "Errors at the hole (first order, seed Eqn 3.5.1): "
+            f"Δx {_num(100 * fo.get('dx', math.nan))}, Δy {_num(100 * fo.get('dy', math.nan))}, "
+            f"Δz {_num(100 * fo.get('dz', math.nan))} cm, "
+            f"Δθ {_num(math.degrees(fo.get('dtheta', math.nan)))}°",
+        ]
+    if records:
+        lines += ["", "Record (the seed's PHL SPEC layout, L2600–2710):", *strategy_spec(s)]
     lines += [
         "",
         f"Candidates ({len(result.candidates)}; {result.mode} refined {result.refined}, "
@@ -297,18 +368,20 @@ def plan_summary(result: PlanResult, proof: Proof | None = None) -> str:
             what = ", ".join(
                 x for x, on in (("tap", c.tap is not None), ("search", c.search is not None)) if on
             )
-            fine, total = f"{c.finetime:8.2f}", f"{c.goodness:8.2f}"
+            fine, total = f"{c.fine_time:8.2f}", f"{c.expected_time:8.2f}"
         else:
-            what, fine, total = "not refined (cutoff)", f"{'—':>8}", f"{'≥':>4}{c.ttime:4.2f}"
+            what, fine, total = "not refined (cutoff)", f"{'—':>8}", f"{'≥':>4}{c.gross_time:4.2f}"
         mark = "*" if c is s else " "
-        lines.append(f"{mark} {c.name:36}{c.ttime:10.2f}{fine}{total}  {what or 'none'}")
+        lines.append(f"{mark} {c.name:36}{c.gross_time:10.2f}{fine}{total}  {what or 'none'}")
+    lines.append("  (gross = pickup + transport; total = gross + fine: the expected time)")
     lines += ["", f"Rejected ({len(result.rejected)}):"]
     lines += [
         f"  - {r.candidate} [{r.stage or '?'}, {r.kind}]: {r.reason}" for r in result.rejected
     ] or ["  none"]
     counts = ", ".join(f"{k} {v}" for k, v in result.counters.items())
     lines += ["", f"Planning time {result.planning_time:.3f} s ({counts})"]
-    return "\n".join(lines)
+    text = "\n".join(lines)
+    return text if verbose else strip_seed_references(text)
 
 
 def _fine_words(s: PinInHoleStrategy) -> str:
@@ -321,23 +394,30 @@ def _fine_words(s: PinInHoleStrategy) -> str:
     return ", ".join(parts) or "no tap, no search"
 
 
-def sequence_summary(sequence: SequencePlan, proof: Proof | None = None) -> str:
-    """The ``synth plan`` text of an assembly sequence: each step, what reuse saved, the proof."""
+def sequence_summary(
+    sequence: SequencePlan, proof: Proof | None = None, *, verbose: bool = False
+) -> str:
+    """The ``synth plan`` text of an assembly sequence: each step, what reuse saved, the proof.
+
+    The same words as :func:`plan_summary` (expected time, errors at the hole); without
+    ``verbose`` the seed's line references are left out.
+    """
     lines = [
         f"Assembly sequence of {len(sequence.steps)} steps (order {sequence.order}; "
         f"{sequence.planned} step plans, {sequence.expanded} prefixes expanded); "
-        f"estimated time {sequence.expected_time:.2f} s",
+        f"expected time {sequence.expected_time:.2f} s",
         "",
     ]
     for k, step in enumerate(sequence.steps, start=1):
         s = step.strategy
         lines.append(
             f"Step {k}: {step.insertion.pin} into {step.insertion.hole} — {s.name}, "
-            f"{step.time:.2f} s ({_fine_words(s)})"
+            f"expected time {step.time:.2f} s ({_fine_words(s)})"
         )
         if s.errors is not None:
             lines.append(
-                f"  errors at the hole: ±{_num(100 * s.errors.dx)} × ±{_num(100 * s.errors.dy)} cm,"
+                f"  errors at the hole: footprint ±{_num(100 * s.errors.dx)} × "
+                f"±{_num(100 * s.errors.dy)} cm,"
                 f" Δz ±{_num(100 * s.errors.dz)} cm"
             )
         if isinstance(step.alone, str):
@@ -350,7 +430,8 @@ def sequence_summary(sequence: SequencePlan, proof: Proof | None = None) -> str:
                 else (f"±{_num(100 * a.errors.dx)} × ±{_num(100 * a.errors.dy)} cm, ")
             )
             lines.append(
-                f"  without what the earlier seats taught: {before}{a.goodness:.2f} s "
+                f"  without what the earlier seats taught: {before}expected time "
+                f"{a.expected_time:.2f} s "
                 f"({_fine_words(a)}); saved {step.saved:.2f} s"
             )
         if step.knowledge is not None and k < len(sequence.steps):
@@ -362,4 +443,5 @@ def sequence_summary(sequence: SequencePlan, proof: Proof | None = None) -> str:
             )
     if proof is not None:
         lines += ["", f"Proof: {proof.summary()}"]
-    return "\n".join(lines)
+    text = "\n".join(lines)
+    return text if verbose else strip_seed_references(text)

@@ -25,7 +25,7 @@ def test_plan_writes_the_program_and_still_prints_the_summary(
     out = tmp_path / "out" / "seed_4_8.al"  # the directory is created
     assert main(["plan", str(TASK), "--proof-trials", "0", "-o", str(out)]) == 0
     printed = capsys.readouterr().out
-    assert "PHL SPEC" in printed and f"AL program written to {out}" in printed
+    assert "Decisions:" in printed and f"AL program written to {out}" in printed
     text = out.read_text(encoding="utf-8")
     parse_program(text)
     if recorded_source() == "planner":

@@ -226,7 +226,7 @@ def test_phi_is_the_fastest_and_dtry_standoff_follow_l2188(ctx, pickups) -> None
         assert (dest.what, dest.base) == ("PIN1", "BH1")
         np.testing.assert_allclose(dest.xf.translation, [0, 0, z * CM], atol=1e-12)
         np.testing.assert_allclose(pin.log3(dest.xf.rotation), [0, 0, s.phi], atol=1e-12)
-    assert s.ttime == pytest.approx(cand.pickup.strategy.goodness + cand.transport_time)
+    assert s.gross_time == pytest.approx(cand.pickup.strategy.pickup_time + cand.transport_time)
     # Pickup time = open + park→approach→grasp + center + lift (50 jiffies each, L3854–3857).
     g = cand.pickup
-    assert g.strategy.goodness == pytest.approx(100 / 60 + g.move_time + g.lift_time)
+    assert g.strategy.pickup_time == pytest.approx(100 / 60 + g.move_time + g.lift_time)

@@ -179,7 +179,7 @@ def test_a_refused_candidate_sends_the_planner_to_the_next_best() -> None:
     everything = plan_task(spec, options=PlanOptions(exhaustive=True))
     ranked = sorted(
         (c for c in everything.candidates if c.refined and c.name != first.name),
-        key=lambda c: c.goodness,
+        key=lambda c: c.expected_time,
     )
     assert second.strategy.name == ranked[0].name
     proof_rejections = [r for r in second.rejected if r.stage == "proof"]

@@ -201,10 +201,14 @@ def test_plate_json_one_record_per_step_and_no_second_tap(tmp_path, capsys):
     assert first["strategy"]["tap"] is not None  # the shim: ±0.75 in along z
     assert first["reuse"]["corrected_axes"] == ["z"]  # x, y ±0.05 cm are known better than ε
     assert second["strategy"]["tap"] is None and second["without_reuse"]["tap"] is True
-    assert second["saved"] == pytest.approx(second["without_reuse"]["time"] - second["time"])
+    assert second["saved"] == pytest.approx(
+        second["without_reuse"]["expected_time"] - second["expected_time"]
+    )
     assert second["saved"] > 0
     assert second["errors"]["dz"] < 0.733 / 100  # below the tap threshold τ(d_f−d_s)/(1+τ)
-    assert document["expected_time"] == pytest.approx(first["time"] + second["time"])
+    assert document["expected_time"] == pytest.approx(
+        first["expected_time"] + second["expected_time"]
+    )
     # The replay names each step's outcome.
     assert main(["replay", str(program), "--task", str(PLATE), "--trials", "0"]) == 0
     out = capsys.readouterr().out

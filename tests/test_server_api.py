@@ -268,7 +268,7 @@ def _store_plan(client: TestClient, name: str) -> str:
                 "exhaustive": False,
                 "validate": False,
             },
-            result={"strategy": {"name": f"s-{name}", "time": {"total": 6.0}}},
+            result={"strategy": {"name": f"s-{name}", "time": {"expected_time": 6.0}}},
             program="BEGIN END\n",
             validation=None,
         )

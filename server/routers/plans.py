@@ -16,6 +16,17 @@ from server.settings import Settings
 
 router = APIRouter(prefix="/v1/plans", tags=["plans"])
 
+
+def _expected_time(result: dict[str, Any]) -> float | None:
+    """A stored plan's expected time [s]: ``strategy.time.expected_time``.
+
+    Rows stored before the times were named as in the text hold it as ``total``.
+    """
+    times = (result.get("strategy") or {}).get("time") or {}
+    value = times.get("expected_time", times.get("total"))
+    return None if value is None else float(value)
+
+
 MAX_CURSOR = 2**63 - 1  # plan sequence numbers are SQL 64-bit integers
 
 _SPEC_EXAMPLE = """\
@@ -140,7 +151,7 @@ async def list_plans(
             task=p.task_name,
             created_at=p.created_at,
             strategy=(p.result.get("strategy") or {}).get("name") or None,
-            expected_time=((p.result.get("strategy") or {}).get("time") or {}).get("total"),
+            expected_time=_expected_time(p.result),
             validated=p.validation is not None,
             links=plan_links(p.id),
         )

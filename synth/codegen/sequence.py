@@ -74,7 +74,7 @@ class _StepView:
 class _SequenceView:
     count: Fragment
     steps: tuple[_StepView, ...]
-    estimated_time: Fragment
+    expected_time: Fragment
 
 
 def _free_name(graph: AttributeGraph, base: str) -> str:
@@ -108,7 +108,7 @@ def correction_view(knowledge: SeatKnowledge, graph: AttributeGraph) -> Correcti
 def emit_sequence(
     steps: Sequence[SequenceStep],
     graph: AttributeGraph,
-    estimated_time: float,
+    expected_time: float,
     *,
     preamble: bool = False,
 ) -> str:
@@ -124,7 +124,7 @@ def emit_sequence(
         for k, s in enumerate(steps, start=1)
     )
     view = _SequenceView(
-        Fragment(str(len(views))), views, L.duration(estimated_time, field="sequence.time")
+        Fragment(str(len(views))), views, L.duration(expected_time, field="sequence.time")
     )
     env = template_environment("al")
     text = env.get_template("sequence.al.j2").render(sequence=view)

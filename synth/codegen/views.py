@@ -41,7 +41,7 @@ from synth.codegen.literals import Fragment
 from synth.codegen.motion import Guard, MoveView, Waypoint, motion_sequence
 from synth.exceptions import CodegenError
 from synth.models.graph import AttributeGraph
-from synth.strategies.records import Destination, PinInHoleStrategy
+from synth.strategies.records import Destination, PinInHoleStrategy, grasp_remarks
 
 __all__ = [
     "AttemptView",
@@ -79,7 +79,9 @@ class FootprintView:
 
 @dataclass(frozen=True)
 class HeaderView:
-    """``{ PIN-IN-HOLE STRATEGY name: DROK = … FPX = … ESTIMATED TIME = … }`` (L2715–2717).
+    """``{ PIN-IN-HOLE STRATEGY name: DROK = … FPX = … EXPECTED TIME = … }`` (L2715–2717).
+
+    The seed printed the last figure as ESTIMATED TIME; the program names it as the text does.
 
     With a tap, the Δz the insertion faces after it (``Tap.dz_after``; the variation's header
     prints that figure, DZ = .188, L2806) follows the footprint's own Δz.
@@ -89,7 +91,7 @@ class HeaderView:
     dr_ok: Fragment
     footprint: FootprintView | None
     dz_after_tap: Fragment | None
-    estimated_time: Fragment
+    expected_time: Fragment
 
 
 @dataclass(frozen=True)
@@ -99,7 +101,7 @@ class PickupView:
     omega: Fragment
     gamma: Fragment
     distance: Fragment
-    remarks: Fragment
+    remarks: Fragment | None
     fingers: Fragment
     hand: Fragment
     pin: Fragment
@@ -296,7 +298,7 @@ def _header(s: PinInHoleStrategy) -> HeaderView:
         dr_ok=L.length(s.dr_ok, field="dr_ok"),
         footprint=footprint,
         dz_after_tap=None if s.tap is None else L.length(s.tap.dz_after, field="tap.dz_after"),
-        estimated_time=L.duration(s.goodness, field="goodness"),
+        expected_time=L.duration(s.expected_time, field="expected_time"),
     )
 
 
@@ -319,7 +321,8 @@ def _pickup(s: PinInHoleStrategy, names: _Names, pin_: Fragment) -> PickupView:
         omega=L.angle(p.grasp.omega, field="pickup.grasp.omega"),
         gamma=L.angle(p.grasp.gamma, field="pickup.grasp.gamma"),
         distance=L.length(p.grasp.distance, field="pickup.grasp.distance"),
-        remarks=L.comment(p.remarks),
+        # the generator's remark restates the grasp the comment's first line gives
+        remarks=None if p.remarks in ("", grasp_remarks(p.grasp)) else L.comment(p.remarks),
         fingers=names.hand(s.fingers, "fingers"),
         hand=names.hand(s.hand, "hand"),
         pin=pin_,

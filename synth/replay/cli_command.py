@@ -1,7 +1,7 @@
 """``synth replay``: run an AL program on the simulated arm — parsing, I/O and printing only.
 
-    synth replay PROGRAM.al --task TASK.yaml [--trials N] [--seed S] [--workers K] [--json]
-                 [--progress]
+    synth replay PROGRAM.al|- --task TASK.yaml [--trials N] [--seed S] [--workers K] [--json]
+                 [--progress] [--export-trajectory OUT.yaml|OUT.csv]
     synth replay --preamble --task TASK.yaml
 
 Exit codes: 0 when the program is valid and its nominal run succeeds; 1 when the nominal run
@@ -19,12 +19,14 @@ import json
 import os
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any, Literal, TextIO
 
 from synth.exceptions import SynthError
 
 __all__ = [
+    "BAR_MIN_TRIALS",
     "DEFAULT_TRIALS",
     "ProgressBar",
     "add_replay_parser",
@@ -39,28 +41,61 @@ __all__ = [
 
 DEFAULT_TRIALS = 100
 """Monte Carlo trials when ``--trials`` is not given."""
-_BAR_MIN_TRIALS = 20
+BAR_MIN_TRIALS = 20
 """Fewer trials than this finish too fast to need a bar."""
 
 
-class ProgressBar:
-    """A one-line progress bar on a text stream: ``replay [#####.....] 120/300 trials 0:42``."""
+def _clock(seconds: float) -> str:
+    """``m:ss`` of a duration [s] (``h:mm:ss`` from an hour on)."""
+    whole = round(seconds)
+    hours, rest = divmod(whole, 3600)
+    minutes, secs = divmod(rest, 60)
+    return f"{hours}:{minutes:02d}:{secs:02d}" if hours else f"{minutes}:{secs:02d}"
 
-    def __init__(self, stream: TextIO, width: int = 30) -> None:
+
+class ProgressBar:
+    """A one-line progress bar on a text stream, with the rate and the time left.
+
+    ``replay [#####.....] 120/300 trials 0:42, 2.9 trials/s, ETA 1:02``. The rate is the
+    trials done over the time since the bar started; the ETA the trials left at that rate
+    (a sequential proof may stop before its budget, so the ETA is an upper bound there).
+    ``clock`` is the time source [s] (tests pass a fake one).
+    """
+
+    def __init__(
+        self,
+        stream: TextIO,
+        width: int = 30,
+        *,
+        label: str = "replay",
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
         self.stream = stream
         self.width = width
-        self.start = time.monotonic()
+        self.label = label
+        self.clock = clock
+        self.start = clock()
         self.drawn = False
+        self._width_drawn = 0
+
+    def line(self, done: int, total: int) -> str:
+        """The bar's text for ``done`` of ``total`` trials (without the carriage return)."""
+        filled = self.width * min(done, total) // max(total, 1)
+        elapsed = max(self.clock() - self.start, 0.0)
+        bar = "#" * filled + "." * (self.width - filled)
+        text = f"{self.label} [{bar}] {done}/{total} trials {_clock(elapsed)}"
+        if done > 0 and elapsed > 0.0:
+            rate = done / elapsed  # [trials/s]
+            text += f", {rate:.3g} trials/s, ETA {_clock(max(total - done, 0) / rate)}"
+        return text
 
     def __call__(self, done: int, total: int) -> None:
         """Redraw for ``done`` of ``total`` trials."""
-        filled = self.width * done // max(total, 1)
-        elapsed = int(time.monotonic() - self.start)
-        bar = "#" * filled + "." * (self.width - filled)
-        self.stream.write(
-            f"\rreplay [{bar}] {done}/{total} trials {elapsed // 60}:{elapsed % 60:02d}"
-        )
+        text = self.line(done, total)
+        pad = max(self._width_drawn - len(text), 0)  # blank what a longer line left behind
+        self.stream.write("\r" + text + " " * pad)
         self.stream.flush()
+        self._width_drawn = len(text)
         self.drawn = True
 
     def close(self) -> None:
@@ -133,8 +168,16 @@ def add_replay_parser(sub: Any) -> None:
     p = sub.add_parser(
         "replay",
         help="run an AL program on the simulated arm: a nominal run and Monte Carlo trials",
+        epilog="exit codes: 0 the nominal run succeeds; 1 it fails (abort, violation, pin not "
+        "seated); 2 unusable input (syntax error, missing file, AL runtime error); 70 internal "
+        "error",
     )
-    p.add_argument("program", nargs="?", metavar="PROGRAM.al", help="the AL program to replay")
+    p.add_argument(
+        "program",
+        nargs="?",
+        metavar="PROGRAM.al",
+        help="the AL program to replay ('-': read it from standard input)",
+    )
     p.add_argument("--task", required=True, metavar="TASK.yaml", help="task specification")
     p.add_argument(
         "--trials",
@@ -181,17 +224,28 @@ def add_replay_parser(sub: Any) -> None:
         action="store_true",
         help="draw the progress bar on stderr even when it is not a terminal",
     )
+    p.add_argument(
+        "--export-trajectory",
+        metavar="OUT.yaml|OUT.csv",
+        help="write the nominal run's joint trajectory: a ROS trajectory_msgs/JointTrajectory "
+        "(.yaml) or CSV, each point marked with its AL line and whether it is guarded",
+    )
     p.set_defaults(func=run_replay)
 
 
 def read_program(path: str) -> str:
-    """The program file's text; a usage error when it cannot be read.
+    """The program file's text (``-``: standard input); a usage error when it cannot be read.
 
     A byte that is not UTF-8 is reported at its line:column.
     """
     try:
-        with open(path, "rb") as f:
-            raw = f.read()
+        if path == "-":
+            stdin = sys.stdin
+            binary = getattr(stdin, "buffer", None)
+            raw = binary.read() if binary is not None else stdin.read().encode("utf-8")
+        else:
+            with open(path, "rb") as f:
+                raw = f.read()
     except FileNotFoundError:
         raise SynthError(f"{path}: no such program file") from None
     except OSError as exc:
@@ -208,7 +262,7 @@ def read_program(path: str) -> str:
             line,
             column,
             f"byte 0x{raw[exc.start]:02x} is not UTF-8 text (AL programs are UTF-8)",
-            filename=path,
+            filename=_display_name(path),
         ) from None
 
 
@@ -233,6 +287,11 @@ def _write_trace(args: argparse.Namespace, text: str) -> None:
     write_output(args.trace, (json.dumps(trace.to_json()) + "\n").encode("utf-8"))
 
 
+def _display_name(path: str) -> str:
+    """How a program's source is named in messages: ``<stdin>`` for ``-``."""
+    return "<stdin>" if path == "-" else path
+
+
 def run_replay(args: argparse.Namespace) -> int:
     """Run ``synth replay`` with parsed ``args``; the exit code (see the module docstring)."""
     from synth.models.loader import load_task
@@ -254,12 +313,15 @@ def run_replay(args: argparse.Namespace) -> int:
             raise SynthError("--svg draws the Monte Carlo trials: give --trials 1 or more")
     if args.trial is not None and (args.trace is None or args.trial < 0):
         raise SynthError("--trial I records trial I ≥ 0 and needs --trace TRACE.json")
+    export = args.export_trajectory
+    if export is not None and not export.lower().endswith((".yaml", ".yml", ".csv")):
+        raise SynthError(f"--export-trajectory {export}: the file must end in .yaml or .csv")
     text = read_program(args.program)
 
     from synth.replay.report import replay_summary
     from synth.replay.run import replay
 
-    show = args.trials >= _BAR_MIN_TRIALS and (args.progress or sys.stderr.isatty())
+    show = args.trials >= BAR_MIN_TRIALS and (args.progress or sys.stderr.isatty())
     bar = ProgressBar(sys.stderr) if show else None
     try:
         report = replay(
@@ -268,7 +330,7 @@ def run_replay(args: argparse.Namespace) -> int:
             trials=args.trials,
             seed=args.seed,
             workers=min(workers, max(args.trials, 1)),
-            filename=args.program,
+            filename=_display_name(args.program),
             progress=bar,
             distribution=args.distribution,
         )
@@ -290,6 +352,19 @@ def run_replay(args: argparse.Namespace) -> int:
         if args.trace is not None:
             which = "nominal run" if args.trial is None else f"trial {args.trial}"
             print(f"trace of the {which} written to {args.trace}")
+    if args.export_trajectory is not None:
+        if report.nominal.outcome != "success":
+            print("synth replay: no trajectory exported: the nominal run failed", file=sys.stderr)
+        else:
+            from synth.replay.trajectory import export_trajectory, write_trajectory
+
+            trajectory = export_trajectory(text, args.task, filename=_display_name(args.program))
+            write_trajectory(trajectory, args.export_trajectory)
+            print(
+                f"trajectory of {len(trajectory.points)} points written to "
+                f"{args.export_trajectory}",
+                file=sys.stderr if args.json else sys.stdout,
+            )
     if report.ok:
         return 0
     return 2 if report.nominal.outcome == "error" else 1

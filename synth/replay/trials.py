@@ -6,16 +6,21 @@ proof's sequential test, :mod:`synth.replay.proof`) sees the same prefix for any
 workers: a trial's outcome depends only on (program, task, seed, i) (:func:`run_trial`).
 Closing the iterator cancels the trials not yet started.
 
-A :class:`TrialPool` is a process pool (``spawn`` start method) that several replays can
-share: each worker builds a program's :class:`~synth.replay.run.ReplayContext` once, keyed by
-the program text, the task and the options, and keeps the last few, so proving one candidate
+A :class:`TrialPool` is a process pool (``spawn`` start method, or ``fork`` where spawn would
+re-run an unguarded script: :func:`start_method`) that several replays can share: each
+worker builds a program's :class:`~synth.replay.run.ReplayContext` once, keyed by the
+program text, the task and the options, and keeps the last few, so proving one candidate
 after another pays the workers' start-up (imports, arm model, meshes) once.
 """
 
 from __future__ import annotations
 
+import ast as pyast
 import hashlib
 import multiprocessing
+import os
+import sys
+import warnings
 from collections import OrderedDict, deque
 from collections.abc import Generator
 from concurrent.futures import Future, ProcessPoolExecutor
@@ -31,7 +36,15 @@ from synth.replay.report import RunReport
 if TYPE_CHECKING:  # run imports this module
     from synth.replay.run import ReplayContext
 
-__all__ = ["TrialJob", "TrialPool", "iter_trials", "job_for", "max_in_flight"]
+__all__ = [
+    "TrialJob",
+    "TrialPool",
+    "iter_trials",
+    "job_for",
+    "main_reimport_is_unsafe",
+    "max_in_flight",
+    "start_method",
+]
 
 _CHUNK = 4
 """Trials per task sent to a worker: small, so an early stop wastes little."""
@@ -106,24 +119,120 @@ def _import_replay() -> None:
     import synth.replay.run  # noqa: F401  (pinocchio, coal, the AL parser and the machine)
 
 
+def _is_main_guard(node: pyast.AST) -> bool:
+    """Whether ``node`` is ``if __name__ == "__main__":`` (either operand order)."""
+    if not isinstance(node, pyast.If) or not isinstance(node.test, pyast.Compare):
+        return False
+    test = node.test
+    if len(test.ops) != 1 or not isinstance(test.ops[0], pyast.Eq):
+        return False
+    sides = [test.left, test.comparators[0]]
+    names = {s.id for s in sides if isinstance(s, pyast.Name)}
+    strings = {s.value for s in sides if isinstance(s, pyast.Constant)}
+    return names == {"__name__"} and strings == {"__main__"}
+
+
+def _guarded(source: str, line: int) -> bool:
+    """Whether ``line`` of a script lies inside an ``if __name__ == "__main__":`` block."""
+    try:
+        tree = pyast.parse(source)
+    except SyntaxError:
+        return False
+    for node in pyast.walk(tree):
+        if _is_main_guard(node):
+            assert isinstance(node, pyast.If)
+            end = node.end_lineno or node.lineno
+            if node.body and node.body[0].lineno <= line <= end:
+                return True
+    return False
+
+
+def main_reimport_is_unsafe() -> bool:
+    """Whether a ``spawn`` worker would re-run the code that is starting it.
+
+    A spawned worker imports the parent's ``__main__`` again (as ``__mp_main__``, from its
+    file or, under ``python -m``, its module name). That is harmless when the code starting
+    the pool runs in a function, under an ``if __name__ == "__main__":`` guard, in ``python
+    -c`` or at an interactive prompt. It is not when a plain script calls the replay at its
+    top level without the guard: each worker would run the script again, start its own pool
+    while bootstrapping, and die — the parent sees ``BrokenProcessPool``. This finds that case:
+    the main module's top-level frame is on the call stack at a line outside any guard.
+    """
+    main = sys.modules.get("__main__")
+    path = getattr(main, "__file__", None)
+    if not path or not os.path.exists(path):
+        return False
+    frame = sys._getframe(1)
+    while frame is not None:
+        code = frame.f_code
+        if code.co_name == "<module>" and os.path.exists(code.co_filename):
+            try:
+                same = os.path.samefile(code.co_filename, path)
+            except OSError:
+                same = False
+            if same:
+                try:
+                    with open(path, encoding="utf-8") as f:
+                        source = f.read()
+                except (OSError, UnicodeDecodeError):
+                    return True
+                return not _guarded(source, frame.f_lineno)
+        frame = frame.f_back  # type: ignore[assignment]
+    return False
+
+
+def start_method() -> str | None:
+    """The pool's start method: ``spawn``, ``fork``, or None for trials in this process.
+
+    ``spawn`` by default: a fresh interpreter per worker inherits no threads or locks of the
+    parent (a server's, HiGHS's), on every platform. When spawn would re-run the calling script
+    (:func:`main_reimport_is_unsafe`), ``fork`` on Linux, which copies this process instead of
+    importing ``__main__`` again (the pool forks its workers before its own manager thread
+    starts, and the replay takes no lock another thread of the parent could hold). ``forkserver``
+    would not help: its workers import ``__main__`` as spawn's do. Where fork is not safe
+    (macOS, Windows) there is no such way, and the trials run in this process: None, with a
+    :class:`RuntimeWarning` from :meth:`TrialPool.executor`'s caller.
+    """
+    if not main_reimport_is_unsafe():
+        return "spawn"
+    if sys.platform.startswith("linux") and "fork" in multiprocessing.get_all_start_methods():
+        return "fork"
+    return None
+
+
 class TrialPool:
     """A pool of ``workers`` processes for Monte Carlo trials, started on first use.
 
     Use it as a context manager, or call :meth:`close`. ``workers=None`` takes one per CPU
     core, and more than the cores are capped at the cores
     (:func:`~synth.replay.cli_command.available_cores`; the CLI says so when it caps).
+    The start method is :func:`start_method`'s, decided when the pool is made; when it is
+    None (an unguarded script where fork is unsafe) the pool has one worker, this process,
+    and says so with a :class:`RuntimeWarning`. :attr:`method` tells which.
     """
 
     def __init__(self, workers: int | None = None) -> None:
         cores = available_cores()
         self.workers = max(1, min(workers if workers is not None else cores, cores))
+        self.method: str | None = "spawn"
+        if self.workers > 1:
+            self.method = start_method()
+            if self.method is None:
+                warnings.warn(
+                    "synth: trials run in this process: a worker would re-run this script "
+                    '(no `if __name__ == "__main__":` guard) and fork is unsafe here',
+                    RuntimeWarning,
+                    stacklevel=2,
+                )
+                self.workers = 1
         self._executor: ProcessPoolExecutor | None = None
 
     def executor(self) -> ProcessPoolExecutor:
         """The process pool (started now if it is not yet)."""
         if self._executor is None:
             self._executor = ProcessPoolExecutor(
-                max_workers=self.workers, mp_context=multiprocessing.get_context("spawn")
+                max_workers=self.workers,
+                mp_context=multiprocessing.get_context(self.method or "spawn"),
             )
         return self._executor
 

@@ -97,7 +97,7 @@ class Candidate:
     @property
     def cost(self) -> float:
         """Gross motion time [s] (pickup + transport), the best-first priority (L2455)."""
-        return self.strategy.ttime
+        return self.strategy.gross_time
 
 
 def _z(z: float) -> pin.SE3:
@@ -217,7 +217,7 @@ def plan_approach(ctx: PlanContext, pickup: Pickup) -> Candidate | Rejection:
         dr_ok=ctx.insertion.dr_ok,
         success_threshold=opts.tau * (d_f - ctx.insertion.d_s),
         force_threshold=opts.force_threshold,
-        ttime=pickup.strategy.goodness + transport,
+        gross_time=pickup.strategy.pickup_time + transport,
         name=name,
         approach_vias=tuple(
             pin_destination(ctx, f"approach via {k + 1}", hole_frame_offset(phi, (0.0, 0.0, z)))

@@ -45,7 +45,7 @@ from synth.models.spec import HandSpec, PinShape
 from synth.models.world import World
 from synth.strategies.context import Configuration, PinEnd, PlanContext, hand_at
 from synth.strategies.options import PlanOptions
-from synth.strategies.records import Destination, Grasp, GraspStrategy, Rejection
+from synth.strategies.records import Destination, Grasp, GraspStrategy, Rejection, grasp_remarks
 
 EXACT = "exact"
 """World atom for a grasp determination of NILTRANS: ``center`` holds the pin exactly (L2630)."""
@@ -586,14 +586,11 @@ def _pickup(
         departure_point=Destination("departure", pin_al, pin_al, _translation(lift)),
         approach_opening=approach_opening,
         grasp_opening=grasp_opening,
-        goodness=goodness,
+        pickup_time=goodness,
         rating=rating,
         joint_solution=tuple(float(x) for x in q_grasp),
         grasp_determination=centering.residual or None,
-        remarks=(
-            f"W = {math.degrees(grasp.omega):.1f} deg Grasp Angle = "
-            f"{math.degrees(grasp.gamma):.1f} deg Grasp Distance = {100 * grasp.distance:.2f}"
-        ),
+        remarks=grasp_remarks(grasp),
         centering=centering,
     )
     world = (

@@ -98,7 +98,7 @@ def plan_task(
             remaining,
             cost=lambda c: c.cost,
             refine=refine_once,
-            refined_cost=lambda r: r.strategy.goodness,
+            refined_cost=lambda r: r.strategy.expected_time,
             minimum_refinement_cost=lower_bound,
             exhaustive=exhaustive,
         )
@@ -124,7 +124,7 @@ def plan_task(
         r.strategy for r in refined if r.strategy.name not in refused_names
     ]
     listed += [c.strategy for c in selection.unrefined]
-    listed.sort(key=lambda s: (not s.refined, s.goodness))
+    listed.sort(key=lambda s: (not s.refined, s.expected_time))
     return PlanResult(
         strategy=best.strategy,
         candidates=tuple(listed),

@@ -71,11 +71,24 @@ class Grasp:
         return {"omega": self.omega, "gamma": self.gamma, "distance": self.distance}
 
 
+def grasp_remarks(grasp: Grasp) -> str:
+    """The pickup record's REMARKS (seed L2697): the grasp restated, with units.
+
+    The emitter leaves a remark equal to this out of the program's PICKUP comment, which
+    already states the grasp.
+    """
+    return (
+        f"W = {math.degrees(grasp.omega):.1f} deg Grasp Angle = "
+        f"{math.degrees(grasp.gamma):.1f} deg Grasp Distance = {100 * grasp.distance:.2f} cm"
+    )
+
+
 @dataclass(frozen=True, eq=False)
 class GraspStrategy:
     """Pickup by grasping between the fingers (seed §4.1 "Grasp Strategy", L1895–1910).
 
-    Openings in [m]; ``goodness`` is the expected pickup time [s]. ``grasp_determination`` is
+    Openings in [m]; ``pickup_time`` is the expected pickup time [s] (the seed's pickup
+    GOODNESS, L2697). ``grasp_determination`` is
     the pin-in-hand error block after ``center`` (None = NILTRANS, exactly held): ``(param,
     lo, hi)`` bounds [m, rad] of a perturbation in the pin frame. ``centering`` holds the
     certified bounds the openings and that block come from
@@ -91,7 +104,7 @@ class GraspStrategy:
     departure_point: Destination
     approach_opening: float
     grasp_opening: float
-    goodness: float
+    pickup_time: float
     rating: float
     joint_solution: tuple[float, ...] = ()
     grasp_determination: Any = None
@@ -109,7 +122,7 @@ class GraspStrategy:
             "departure_point": self.departure_point.to_json(),
             "approach_opening": self.approach_opening,
             "grasp_opening": self.grasp_opening,
-            "goodness": self.goodness,
+            "pickup_time": self.pickup_time,
             "rating": self.rating,
             "remarks": self.remarks,
             "grasp_determination": None
@@ -247,7 +260,9 @@ class PinInHoleStrategy:
     into the hole the guarded move aims (d_f + 1 in); ``standoff`` [m] the approach height
     above the hole. ``success_threshold`` [m] is the ``DISTANCE_OFF`` test of the generated
     program and ``force_threshold`` [N] the guarded moves' stop force. Times in [s]:
-    ``ttime`` (pickup + transport), ``finetime`` (tap + search), ``goodness`` = their sum.
+    ``gross_time`` (pickup + transport: the seed's TTIME, printed as GOODNESS), ``fine_time``
+    (tap + search: FINETIME) and :attr:`expected_time` = their sum (L1888);
+    :attr:`pickup_time` and :attr:`transport_time` split ``gross_time`` (``docs/glossary.md``).
 
     After the insertion (seed L2839–2844): ``fingers`` is the AL name of the hand device that
     ``OPEN`` drives (``BHAND``; ``hand`` is the arm frame, ``BMANIP``); ``release_opening`` [m]
@@ -271,8 +286,8 @@ class PinInHoleStrategy:
     dr_ok: float
     success_threshold: float
     force_threshold: float
-    ttime: float
-    finetime: float = 0.0
+    gross_time: float
+    fine_time: float = 0.0
     errors: ErrorFootprint | None = None
     tap: Tap | None = None
     search: Search | None = None
@@ -291,9 +306,19 @@ class PinInHoleStrategy:
     the arm model, added to the footprint)."""
 
     @property
-    def goodness(self) -> float:
-        """Expected total time [s]: ``ttime + finetime`` (seed L1888)."""
-        return self.ttime + self.finetime
+    def expected_time(self) -> float:
+        """Expected total time [s]: ``gross_time + fine_time`` (seed L1888)."""
+        return self.gross_time + self.fine_time
+
+    @property
+    def pickup_time(self) -> float:
+        """Expected pickup time [s]: open, approach and grasp, centre, lift."""
+        return self.pickup.pickup_time
+
+    @property
+    def transport_time(self) -> float:
+        """Expected time [s] carrying the pin from the pickup to above the hole."""
+        return self.gross_time - self.pickup.pickup_time
 
     @property
     def let_go_opening(self) -> float:
@@ -347,17 +372,29 @@ class PinInHoleStrategy:
                 "zeta": errors.zeta,
                 "dtheta": errors.dtheta,
             },
-            "time": {
-                "transport": self.ttime,
-                "fine": self.finetime,
-                "total": self.goodness,
-            },
+            "time": time_json(self),
             "success_threshold": self.success_threshold,
             "force_threshold": self.force_threshold,
             "let_go_opening": self.let_go_opening,
             "get_clear": self.get_clear.to_json(),
             "decisions": list(self.decisions),
         }
+
+
+def time_json(s: PinInHoleStrategy) -> dict[str, float]:
+    """A strategy's expected times [s] under the names the text uses (``docs/glossary.md``).
+
+    ``expected_time`` = ``pickup_time`` + ``transport_time`` + ``fine_time``;
+    ``gross_time`` = ``pickup_time`` + ``transport_time`` (the candidates' ranking before
+    refinement).
+    """
+    return {
+        "pickup_time": s.pickup_time,
+        "transport_time": s.transport_time,
+        "gross_time": s.gross_time,
+        "fine_time": s.fine_time,
+        "expected_time": s.expected_time,
+    }
 
 
 @dataclass(frozen=True)
@@ -418,9 +455,7 @@ class PlanResult:
                     "grasp": c.pickup.grasp.to_json(),
                     "phi": c.phi,
                     "refined": c.refined,
-                    "time": c.goodness,
-                    "transport": c.ttime,
-                    "fine": c.finetime,
+                    "time": time_json(c),
                     "tap": c.tap is not None,
                     "search": c.search is not None,
                 }

@@ -16,7 +16,7 @@ For one basic strategy, in its own world:
    (:mod:`synth.strategies.search`);
 6. the fine motions (insertion, search points, tap, let-go, get-clear) must be clear of the
    workcell (:mod:`synth.strategies.fine`);
-7. ``finetime`` = tap time + search time; the success test's threshold is ``Δz/τ`` with the
+7. ``fine_time`` = tap time + search time; the success test's threshold is ``Δz/τ`` with the
    tap-corrected Δz (the programs of §4.8 test ``|DISTANCE_OFF| > .169`` = .127/.75, L2738,
    and ``> .239`` ≈ .180/.75, L2836).
 
@@ -183,13 +183,13 @@ def refine(ctx: PlanContext, cand: Candidate) -> Refined | Rejection:
             f"no search: error footprint ±{_cm(fp.dx)} × ±{_cm(fp.dy)} is within Δr_ok = "
             f"{_cm(ins.dr_ok)}"
         )
-    finetime = (0.0 if tap is None else tap.time) + (0.0 if search is None else search.time)
+    fine_time = (0.0 if tap is None else tap.time) + (0.0 if search is None else search.time)
     strategy = dataclasses.replace(
         cand.strategy,
         errors=fp,
         tap=tap,
         search=search,
-        finetime=finetime,
+        fine_time=fine_time,
         success_threshold=dz / opts.tau,
         decisions=tuple(decisions),
     )

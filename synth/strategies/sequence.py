@@ -15,8 +15,8 @@ before it leave:
 
 Order (``insertions.order``): ``fixed`` runs the listed order; ``free`` searches every order
 best-first. A node is a prefix of steps with its cost g = Σ expected step times (each step's
-``goodness``: pickup + transport + fine motion); the frontier is expanded cheapest first and the
-first complete sequence taken. The heuristic is h = 0, which is admissible (no step takes
+``expected_time``: pickup + transport + fine motion); the frontier is expanded cheapest first
+and the first complete sequence taken. The heuristic is h = 0, which is admissible (no step takes
 negative time), so the first complete sequence popped has the least expected total time of all
 orders, given each step's best-first plan (a step's time is not bounded below usefully without
 planning it: it depends on where the arm comes from and on what the earlier seats taught).
@@ -82,14 +82,14 @@ class StepPlan:
     @property
     def time(self) -> float:
         """Expected time of the step [s]."""
-        return self.plan.strategy.goodness
+        return self.plan.strategy.expected_time
 
     @property
     def saved(self) -> float | None:
         """Expected time reuse saved on this step [s] (None: not compared, or refused alone)."""
         if not isinstance(self.alone, PlanResult):
             return None
-        return self.alone.strategy.goodness - self.time
+        return self.alone.strategy.expected_time - self.time
 
 
 @dataclass(frozen=True, eq=False)

@@ -82,7 +82,7 @@ def seed_4_8() -> PinInHoleStrategy:
         departure_point=Destination("departure", "PIN1", "PIN1", _xf(_NIL, (0, 0, 6.79))),
         approach_opening=2.98 * CM,
         grasp_opening=0.185 * CM,
-        goodness=4.16,  # PICKUP GOODNESS, L2697
+        pickup_time=4.16,  # PICKUP GOODNESS, L2697
         rating=0.0,  # not printed
     )
     approach, destination, target = _insertion()
@@ -102,8 +102,8 @@ def seed_4_8() -> PinInHoleStrategy:
         dr_ok=0.762 * CM,
         success_threshold=0.169 * CM,
         force_threshold=8 * OZ,
-        ttime=6.14 - 0.688,  # GOODNESS 6.14 less FINE TIME .688, L2703–2705
-        finetime=0.688,
+        gross_time=6.14 - 0.688,  # GOODNESS 6.14 less FINE TIME .688, L2703–2705
+        fine_time=0.688,
         errors=ErrorFootprint(
             dx=1.58 * CM,
             dy=1.15 * CM,
@@ -138,7 +138,7 @@ def seed_4_8_tap() -> PinInHoleStrategy:
         departure_point=Destination("departure", "PIN1", "PIN1", _xf(_NIL, (0, 0, 6.79))),
         approach_opening=2.98 * CM,
         grasp_opening=0.185 * CM,
-        goodness=4.16,  # not printed for the variation; the search version's figure
+        pickup_time=4.16,  # not printed for the variation; the search version's figure
         rating=0.0,
     )
     approach, destination, target = _insertion()
@@ -159,8 +159,8 @@ def seed_4_8_tap() -> PinInHoleStrategy:
         dr_ok=0.762 * CM,
         success_threshold=0.239 * CM,
         force_threshold=8 * OZ,
-        ttime=6.67 - 1.2,  # ESTIMATED TIME 6.67 (L2806); tapping ≈ 1.2 s (§8 of the notes)
-        finetime=1.2,
+        gross_time=6.67 - 1.2,  # ESTIMATED TIME 6.67 (L2806); tapping ≈ 1.2 s (§8 of the notes)
+        fine_time=1.2,
         errors=ErrorFootprint(dx=0.243 * CM, dy=0.226 * CM, dz=0.188 * CM, zeta=0.524, dtheta=0.0),
         tap=Tap(
             offset=(tap_place[0] * CM, tap_place[1] * CM, 0.0),

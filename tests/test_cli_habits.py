@@ -1,0 +1,116 @@
+"""CLI habits: ``--version``, exit codes in ``--help``, ``-o -``, ``replay -``, rate and ETA,
+and the plain default text of ``synth plan`` (records behind ``--records``, seed line
+references behind ``--verbose``)."""
+
+from __future__ import annotations
+
+import io
+import re
+import subprocess
+import sys
+from importlib.metadata import version
+from pathlib import Path
+
+import pytest
+
+from synth.al.parser import parse_program
+from synth.cli import EXIT_INTERNAL, EXIT_REPLAY_FAILED, EXIT_USAGE, main
+from synth.replay.cli_command import ProgressBar
+from synth.report import strip_seed_references
+
+ROOT = Path(__file__).resolve().parents[1]
+TASK = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
+GOLDEN = ROOT / "fixtures" / "golden" / "seed_4_8.al"
+SYNTH = [sys.executable, "-m", "synth.cli"]
+SEED_REF = re.compile(r"seed L\d|\bL\d{4}\b|seed Eqn")
+
+
+def test_version_comes_from_the_package_metadata(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as exit_:
+        main(["--version"])
+    assert exit_.value.code == 0
+    assert capsys.readouterr().out.strip() == f"synth {version('synth')}"
+
+
+def test_help_lists_the_exit_codes(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    text = capsys.readouterr().out
+    block = text[text.index("exit codes:") :]
+    for code in (0, EXIT_REPLAY_FAILED, EXIT_USAGE, EXIT_INTERNAL):
+        assert re.search(rf"^\s+{code}\s+\S", block, re.MULTILINE), code
+
+
+def test_plan_to_stdout_writes_only_the_program(tmp_path: Path) -> None:
+    done = subprocess.run(
+        [*SYNTH, "plan", str(TASK), "--proof-trials", "0", "-o", "-"],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    assert not (tmp_path / "-").exists()
+    parse_program(done.stdout)
+    assert done.stdout == GOLDEN.read_text(encoding="utf-8")
+    assert "Decisions:" in done.stderr and "Decisions:" not in done.stdout
+
+
+def test_replay_reads_the_program_from_stdin(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.setattr(sys, "stdin", io.StringIO(GOLDEN.read_text(encoding="utf-8")))
+    assert main(["replay", "-", "--task", str(TASK), "--trials", "0"]) == 0
+    assert "success" in capsys.readouterr().out
+
+
+def test_replay_from_stdin_names_stdin_in_errors(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.setattr(sys, "stdin", io.StringIO("MOVE BMANIP TO ;\n"))
+    assert main(["replay", "-", "--task", str(TASK), "--trials", "0"]) == EXIT_USAGE
+    assert "<stdin>" in capsys.readouterr().err
+
+
+def test_progress_shows_rate_and_eta() -> None:
+    now = [100.0]
+    stream = io.StringIO()
+    bar = ProgressBar(stream, width=10, label="proof", clock=lambda: now[0])
+    assert "trials/s" not in bar.line(0, 100)  # no rate before the first trial
+    now[0] += 20.0
+    bar(40, 100)  # 2 trials/s, 60 left: 30 s
+    assert stream.getvalue() == "\rproof [####......] 40/100 trials 0:20, 2 trials/s, ETA 0:30"
+    now[0] += 10.0
+    bar(50, 100)  # 50 in 30 s: 1.67 trials/s, 50 left: 30 s
+    assert stream.getvalue().endswith("50/100 trials 0:30, 1.67 trials/s, ETA 0:30")
+    bar.close()
+    assert stream.getvalue().endswith("\n")
+
+
+def test_plan_text_leads_with_decisions_and_hides_records_and_seed_lines(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    assert main(["plan", str(TASK), "--proof-trials", "0"]) == 0
+    plain = capsys.readouterr().out
+    head = plain.splitlines()
+    assert head[0].startswith("Plan: ") and head[2] == "Decisions:"
+    assert plain.index("Expected time") < plain.index("Proof:") < plain.index("Candidates")
+    assert "PHL SPEC" not in plain and "NULL_RECORD" not in plain and "NILTRANS" not in plain
+    assert not SEED_REF.search(plain)
+    assert plain.count("grasp orientation") == 1 and plain.count("the hole's axis as it") == 1
+
+    assert main(["plan", str(TASK), "--proof-trials", "0", "--records", "--verbose"]) == 0
+    full = capsys.readouterr().out
+    assert "PHL SPEC" in full and "GRASP DETERM: NILTRANS" in full
+    assert "seed L2122" in full  # the pruning rule's reference, kept under --verbose
+
+
+def test_seed_references_are_stripped_with_their_separators() -> None:
+    assert strip_seed_references("kept (seed L2122; --try-harder keeps all)") == (
+        "kept (--try-harder keeps all)"
+    )
+    assert strip_seed_references("Δr_ok (measured, seed L1963) exceeds") == (
+        "Δr_ok (measured) exceeds"
+    )
+    assert strip_seed_references("First order (seed Eqn 3.5.1): Δx") == "First order: Δx"
+    assert strip_seed_references("no reference here (3 rings)") == "no reference here (3 rings)"
