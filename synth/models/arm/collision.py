@@ -22,7 +22,7 @@ pin, the pin in its hole — and remove exactly those pairs; nothing else is exe
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any, TypeAlias
 
@@ -202,6 +202,7 @@ class CollisionScene:
         ) = None
         self._placed: NDArray[np.float64] | None = None
         self._exact_last: set[int] = set()
+        self._tight: NDArray[np.float64] | None = None
         index = {n: i for i, n in enumerate(names)}
         self.body_bounds = body_motion_bounds(self.model, arm.limits, self.bodies)
         self.pair_bounds = pair_motion_bounds(
@@ -312,6 +313,7 @@ class CollisionScene:
                 [(index[a], index[b]) for a, b in self.pairs],
                 self.body_bounds,
             )
+            self._tight = None
         self.forget()
 
     def with_held(
@@ -391,6 +393,21 @@ class CollisionScene:
                 d[k] = exact[int(k)].min_distance
         return d
 
+    @property
+    def tight_pair_bounds(self) -> NDArray[np.float64]:
+        """:attr:`pair_bounds` without the joints that cannot change a pair's distance.
+
+        A body that is a solid of revolution (a Coal cylinder, cone or capsule about its z, or
+        a sphere) whose axis is a revolute joint j's axis, both fixed in the frame of j's parent
+        joint, is carried onto itself by a turn of j; j turns the other body of the pair, and
+        everything under j, rigidly about that same axis, so the pair's distance does not
+        depend on q_j and its term |∂d/∂q_j|·|Δq_j| is zero (the column about θ1, the shoulder
+        about θ2, the wrist sphere about θ6 of the Stanford arm). Every other term stays.
+        """
+        if self._tight is None:
+            self._tight = self.pair_bounds * _symmetry_mask(self.model, self.bodies, self.pairs)
+        return self._tight
+
     # Lazy per-pair queries (swept checks): each pair's last measured distance and where it
     # was measured give a lower bound anywhere, so only the pairs that can matter are measured.
 
@@ -425,7 +442,7 @@ class CollisionScene:
         pin.updateGeometryPlacements(self.model, self.data, self.geometry_model, self.geometry_data)
         self._placed = qa.copy()
         self._exact_last = set()
-        bounds = self.pair_bounds
+        bounds = self.tight_pair_bounds
         lb_hull = hull - np.einsum("ij,ij->i", bounds, np.abs(qa[None, :] - q_hull))
         lb_mesh = mesh - np.einsum("ij,ij->i", bounds, np.abs(qa[None, :] - q_mesh))
         return np.where(
@@ -487,6 +504,49 @@ class CollisionScene:
                 for k, v in sorted(self.excluded.items(), key=lambda kv: sorted(kv[0]))
             },
         }
+
+
+_REVOLUTE_AXES = {"JointModelRX": 0, "JointModelRY": 1, "JointModelRZ": 2}
+_ROUND = (coal.Cylinder, coal.Cone, coal.Capsule)
+
+
+def _symmetry_mask(
+    model: pin.Model, bodies: Sequence[Body], pairs: Sequence[Pair]
+) -> NDArray[np.float64]:
+    """Per pair and joint velocity index: 0 where the joint cannot change the pair's distance.
+
+    See :attr:`CollisionScene.tight_pair_bounds`; the axes must coincide within 1e-9 m and rad.
+    """
+    index = {b.name: i for i, b in enumerate(bodies)}
+    supports = [set(model.supports[b.joint]) for b in bodies]
+    mask = np.ones((len(pairs), model.nv))
+    # (body, joint) where a turn of the joint carries the body onto itself
+    invariant: list[tuple[int, int]] = []
+    for i, body in enumerate(bodies):
+        geometry = body.geometry
+        sphere = isinstance(geometry, coal.Sphere)
+        if not (sphere or isinstance(geometry, _ROUND)):
+            continue
+        centre = np.asarray(body.placement.translation)
+        along = np.asarray(body.placement.rotation[:, 2])
+        for j in range(1, model.njoints):
+            axis_index = _REVOLUTE_AXES.get(model.joints[j].shortname())
+            if axis_index is None or model.parents[j] != body.joint:
+                continue
+            placement = model.jointPlacements[j]
+            direction = np.asarray(placement.rotation[:, axis_index])
+            offset = centre - np.asarray(placement.translation)
+            off_axis = float(np.linalg.norm(np.cross(offset, direction)))
+            parallel = sphere or float(np.linalg.norm(np.cross(along, direction))) < 1e-9
+            if parallel and off_axis < 1e-9:
+                invariant.append((i, j))
+    for k, (a, b) in enumerate(pairs):
+        ia, ib = index[a], index[b]
+        for i, j in invariant:
+            other = ib if i == ia else ia if i == ib else None
+            if other is not None and j in supports[other] and j not in supports[i]:
+                mask[k, model.joints[j].idx_v] = 0.0
+    return mask
 
 
 def _structure(

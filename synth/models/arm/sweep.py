@@ -316,7 +316,7 @@ def _advance_lazy(
     above every value the eager check takes its minimum, argmin and step from, so both checks
     take the same steps and stop at the same s with the same pair and distance.
     """
-    bounds = scene.pair_bounds @ rates  # M per pair [m per unit s]
+    bounds = scene.tight_pair_bounds @ rates  # M per pair [m per unit s]
     margins = options.pair_margins(scene.pairs)
     clearance = options.clearance
     exact_below = clearance + margins
