@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import hashlib
 import multiprocessing
+import signal
 from collections import OrderedDict, deque
 from collections.abc import Generator
 from concurrent.futures import Future, ProcessPoolExecutor
@@ -102,6 +103,11 @@ def _run_chunk(job: TrialJob, seed: int, start: int, stop: int) -> list[RunRepor
     return [run_trial(context, seed, i) for i in range(start, stop)]
 
 
+def _ignore_interrupts() -> None:
+    """Worker initializer: Ctrl-C is the parent's to handle (it stops the workers itself)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def _import_replay() -> None:
     import synth.replay.run  # noqa: F401  (pinocchio, coal, the AL parser and the machine)
 
@@ -123,7 +129,9 @@ class TrialPool:
         """The process pool (started now if it is not yet)."""
         if self._executor is None:
             self._executor = ProcessPoolExecutor(
-                max_workers=self.workers, mp_context=multiprocessing.get_context("spawn")
+                max_workers=self.workers,
+                mp_context=multiprocessing.get_context("spawn"),
+                initializer=_ignore_interrupts,
             )
         return self._executor
 
@@ -142,6 +150,19 @@ class TrialPool:
         if self._executor is not None:
             self._executor.shutdown(wait=True, cancel_futures=True)
             self._executor = None
+
+    def abort(self) -> None:
+        """Stop now: cancel the queued trials and terminate the workers mid-trial (Ctrl-C)."""
+        executor = self._executor
+        if executor is None:
+            return
+        self._executor = None
+        processes = list((getattr(executor, "_processes", None) or {}).values())
+        executor.shutdown(wait=False, cancel_futures=True)
+        for process in processes:
+            process.terminate()
+        for process in processes:
+            process.join(timeout=1.0)
 
     def __enter__(self) -> TrialPool:
         return self
