@@ -2,6 +2,7 @@
 
     synth replay PROGRAM.al --task TASK.yaml [--trials N] [--seed S] [--workers K] [--json]
                  [--progress] [--failures K] [--min-success P]
+    synth replay PROGRAM.al --task TASK.yaml --trials N --dask ADDRESS|local
     synth replay PROGRAM.al --task TASK.yaml --trial I [--seed S] [--json]
     synth replay --preamble --task TASK.yaml
 
@@ -26,6 +27,7 @@ This module imports nothing heavy at import time, so ``synth --help`` stays fast
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import sys
@@ -171,6 +173,13 @@ def add_replay_parser(sub: Any) -> None:
         help="exit 1 when the observed Monte Carlo success rate is below P (0–1; the rate "
         "itself is compared, as the proof does, not its Wilson bound)",
     )
+    p.add_argument(
+        "--dask",
+        default=None,
+        metavar="ADDRESS",
+        help="run the trials on the Dask cluster whose scheduler is at ADDRESS, or on a new "
+        "local cluster of --workers processes with 'local' (needs the dask extra)",
+    )
     p.set_defaults(func=run_replay)
 
 
@@ -220,27 +229,17 @@ def run_replay(args: argparse.Namespace) -> int:
         return _run_one(args, text)
 
     from synth.replay.report import replay_summary
-    from synth.replay.run import replay
 
     show = args.trials >= _BAR_MIN_TRIALS and (args.progress or sys.stderr.isatty())
     bar = ProgressBar(sys.stderr) if show else None
     records = _TrialOutput(sys.stdout, args.failures, stream_json=args.json)
-    try:
-        report = replay(
-            text,
-            args.task,
-            trials=args.trials,
-            seed=args.seed,
-            workers=min(workers, max(args.trials, 1)),
-            filename=args.program,
-            progress=bar,
-            distribution=args.distribution,
-            on_trial=records if records.wanted else None,
-            failures_only=not args.json,
-        )
-    finally:
-        if bar is not None:
-            bar.close()
+    with contextlib.ExitStack() as stack:
+        client = None
+        if args.dask is not None and args.trials:
+            from synth.replay.cluster import dask_client
+
+            client = stack.enter_context(dask_client(args.dask, workers))
+        report = _replay_with(args, text, workers, bar, records, client)
     if args.json:
         records.finish(report.to_json())
     else:
@@ -261,6 +260,37 @@ def run_replay(args: argparse.Namespace) -> int:
             )
         return 1
     return 0
+
+
+def _replay_with(
+    args: argparse.Namespace,
+    text: str,
+    workers: int,
+    bar: ProgressBar | None,
+    records: _TrialOutput,
+    client: Any,
+) -> Any:
+    """The replay of ``args`` (on ``client``'s Dask cluster when given); the bar closed."""
+    from synth.replay.run import replay
+
+    try:
+        report = replay(
+            text,
+            args.task,
+            trials=args.trials,
+            seed=args.seed,
+            workers=min(workers, max(args.trials, 1)),
+            filename=args.program,
+            progress=bar,
+            distribution=args.distribution,
+            on_trial=records if records.wanted else None,
+            failures_only=not args.json,
+            client=client,
+        )
+    finally:
+        if bar is not None:
+            bar.close()
+    return report
 
 
 def _check_diagnostics(args: argparse.Namespace) -> None:

@@ -333,6 +333,7 @@ def replay(
     distribution: Distribution | None = None,
     on_trial: TrialSink | None = None,
     failures_only: bool = False,
+    client: Any | None = None,
 ) -> ReplayReport:
     """Replay ``program_text`` on ``task``: the nominal run and ``trials`` Monte Carlo trials.
 
@@ -346,6 +347,9 @@ def replay(
     itself keeps no more than its bounded tally. A ``KeyboardInterrupt`` (Ctrl-C) stops the
     trials at once, workers included: the report then has the trials completed so far and
     ``interrupted`` set.
+
+    ``client``, a ``distributed.Client``, runs the trials on its Dask cluster instead of
+    ``workers`` local processes (:mod:`synth.replay.cluster`): the same report.
     """
     if trials < 0:
         raise ValueError(f"trials must be ≥ 0, got {trials}")
@@ -363,9 +367,15 @@ def replay(
     job = job_for(program_text, context, filename=filename, base_dir=base_dir, options=options)
     tally = TrialTally()  # bounded memory, whatever ``trials`` is
     interrupted = False
-    with TrialPool(min(workers, max(trials, 1))) as pool:
+    with TrialPool(1 if client is not None else min(workers, max(trials, 1))) as pool:
+        if client is not None:
+            from synth.replay.cluster import iter_trials_on
+
+            runs = iter_trials_on(client, job, seed, trials)
+        else:
+            runs = iter_trials(job, context, seed, trials, pool)
         try:
-            for run in iter_trials(job, context, seed, trials, pool):
+            for run in runs:
                 if on_trial is not None and not (failures_only and run.success):
                     on_trial(trial_record(context, seed, tally.count, run))
                 tally.add(run)
@@ -374,6 +384,8 @@ def replay(
         except KeyboardInterrupt:
             interrupted = True
             pool.abort()
+        finally:
+            runs.close()  # cancels what is still queued (pool or cluster)
     return ReplayReport(
         filename,
         context.spec.name,

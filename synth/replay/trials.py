@@ -32,7 +32,7 @@ from synth.replay.report import RunReport
 if TYPE_CHECKING:  # run imports this module
     from synth.replay.run import ReplayContext
 
-__all__ = ["TrialJob", "TrialPool", "iter_trials", "job_for", "max_in_flight"]
+__all__ = ["TrialJob", "TrialPool", "iter_trials", "job_for", "max_in_flight", "run_chunk"]
 
 _CHUNK = 4
 """Trials per task sent to a worker: small, so an early stop wastes little."""
@@ -94,6 +94,11 @@ def _context(job: TrialJob) -> ReplayContext:
     while len(_CONTEXTS) > _CACHED_CONTEXTS:
         _CONTEXTS.popitem(last=False)
     return context
+
+
+def run_chunk(job: TrialJob, seed: int, start: int, stop: int) -> list[RunReport]:
+    """Trials ``start`` … ``stop − 1`` of ``job`` in this process (its context cached)."""
+    return _run_chunk(job, seed, start, stop)
 
 
 def _run_chunk(job: TrialJob, seed: int, start: int, stop: int) -> list[RunReport]:
