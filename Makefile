@@ -12,7 +12,7 @@ FUZZ_ARGS  ?=
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[dev,robots]'
+	$(BIN)/python -m pip install --quiet -e '.[dev,robots,dask]'
 	touch $(STAMP)
 
 demo: $(STAMP)

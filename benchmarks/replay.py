@@ -1,35 +1,149 @@
-"""Time the referee: AL parsing, the nominal replay, and Monte Carlo trials on 1 and 2 workers.
+"""Time the referee: AL parsing, the nominal replay, Monte Carlo trials, fast against reference.
 
-Usage: python benchmarks/replay.py [--trials N] [--repeat N]
+Usage: python benchmarks/replay.py [--trials N] [--repeat N] [--fast-trials N]
+                                   [--reference-trials N] [--only-ratio]
 Prints a table: parse time per kB of AL (the seed's search listing), the nominal replay of the
 search and first-cut programs on seed_4_8 (median of ``--repeat`` runs), and Monte Carlo trials
 per second on 1 and 2 worker processes (``--trials`` trials each), net of the set-up a run with
 as many trials as workers takes (parsing, the arm and meshes, the nominal run, starting workers).
+
+**Fast against reference.** For the seed's search listing and synth's own program
+(fixtures/golden/seed_4_8.al), trials 0, 1, … of seed 0 run in this process on the fast path
+(``--fast-trials``) and on the reference path, ``ReplayOptions(reference=True)``: every pair and
+target measured at every step, scenes rebuilt (``--reference-trials``, the first of the same
+trials). Printed per path: trials/s, µs per motion (per MOVE), µs per distance query and the
+queries per trial (Coal distances: pin–obstacle and arm/hand pairs, counted in a separate,
+untimed pass), and the ratio of the two rates; the outcomes of the shared trials are checked
+to agree.
 """
 
 from __future__ import annotations
 
 import argparse
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 from _timing import per_call_us
 
+import synth.models.arm.collision as collision
+import synth.replay.contact as contact
+import synth.replay.machine as machine
 from synth.al.parser import parse_program
-from synth.replay import build_context, replay, run_nominal
+from synth.replay import ReplayOptions, build_context, replay, run_nominal, run_trial
 
 ROOT = Path(__file__).resolve().parent.parent
 DATA = ROOT / "tests" / "data" / "al"
 SEED = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
+PROGRAMS = {
+    "seed_4_8_search.al": DATA / "seed_4_8_search.al",
+    "golden/seed_4_8.al": ROOT / "fixtures" / "golden" / "seed_4_8.al",
+}
+
+
+class Counts:
+    """Motions and Coal distance queries, counted by wrapping the functions that make them."""
+
+    def __init__(self) -> None:
+        self.motions = 0
+        self.queries = 0
+        self._saved: list[tuple[object, str, object]] = []
+
+    def _wrap(self, owner: object, name: str, cost: Callable[..., int]) -> None:
+        original = getattr(owner, name)
+        self._saved.append((owner, name, original))
+
+        def counted(*args: object, **kwargs: object) -> object:
+            self.queries += cost(*args, **kwargs)
+            return original(*args, **kwargs)
+
+        setattr(owner, name, counted)
+
+    def __enter__(self) -> Counts:
+        self._wrap(contact._Pin, "distance", lambda *a, **k: 1)
+        self._wrap(contact._Pin, "gap", lambda *a, **k: 1)
+        self._wrap(collision.CollisionScene, "measure", lambda *a, **k: 1)
+        self._wrap(
+            collision.CollisionScene,
+            "distance_bounds",
+            lambda scene, *a, **k: len(scene.pairs),
+        )
+        original_move = machine.ReplayMachine.move
+        self._saved.append((machine.ReplayMachine, "move", original_move))
+
+        def move(*args: object, **kwargs: object) -> object:
+            self.motions += 1
+            return original_move(*args, **kwargs)  # type: ignore[arg-type]
+
+        machine.ReplayMachine.move = move  # type: ignore[method-assign]
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        for owner, name, original in reversed(self._saved):
+            setattr(owner, name, original)
+
+
+def compare_paths(
+    name: str, text: str, fast_n: int, reference_n: int
+) -> list[tuple[str, str, str]]:
+    """Rows of fast against reference on ``text``: trials/s, µs per motion and per query."""
+    rows = []
+    rates = {}
+    outcomes = {}
+    for label, reference, n in (("fast", False, fast_n), ("reference", True, reference_n)):
+        context = build_context(text, SEED, options=ReplayOptions(reference=reference))
+        run_trial(context, 0, 0)  # warm: meshes, hulls, caches
+        with Counts() as counts:
+            for i in range(min(n, 3)):
+                run_trial(context, 0, i)
+        per_trial = (counts.motions / min(n, 3), counts.queries / min(n, 3))
+        start = time.perf_counter()
+        runs = [run_trial(context, 0, i) for i in range(n)]
+        wall = time.perf_counter() - start
+        outcomes[label] = [(r.outcome, r.line, r.message) for r in runs]
+        rates[label] = n / wall
+        trial_us = 1e6 * wall / n
+        rows.append(
+            (
+                f"{label} path ({name}, 1 process)",
+                f"{rates[label]:,.2f} trials/s",
+                f"{n} trials; {trial_us / per_trial[0]:,.0f} µs per motion, "
+                f"{trial_us / per_trial[1]:,.1f} µs per distance query, "
+                f"{per_trial[1]:,.0f} queries per trial",
+            )
+        )
+    shared = min(fast_n, reference_n)
+    agree = outcomes["fast"][:shared] == outcomes["reference"][:shared]
+    rows.append(
+        (
+            f"fast / reference ({name})",
+            f"{rates['fast'] / rates['reference']:,.2f}×",
+            f"outcomes of the {shared} shared trials {'agree' if agree else 'DIFFER'}",
+        )
+    )
+    return rows
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--trials", type=int, default=200, help="Monte Carlo trials per figure")
     parser.add_argument("--repeat", type=int, default=5, help="repetitions of the timed calls")
+    parser.add_argument("--fast-trials", type=int, default=40, help="trials on the fast path")
+    parser.add_argument(
+        "--reference-trials", type=int, default=10, help="trials on the reference path"
+    )
+    parser.add_argument(
+        "--only-ratio", action="store_true", help="print the fast/reference rows only"
+    )
     args = parser.parse_args()
 
     rows: list[tuple[str, str, str]] = []
+    for name, path in PROGRAMS.items():
+        text = path.read_text(encoding="utf-8")
+        rows += compare_paths(name, text, args.fast_trials, args.reference_trials)
+    if args.only_ratio:
+        print_rows(rows)
+        return
     search = (DATA / "seed_4_8_search.al").read_text(encoding="utf-8")
     kb = len(search.encode("utf-8")) / 1024
     parse_us = per_call_us(lambda: parse_program(search), args.repeat * 20)
@@ -68,6 +182,11 @@ def main() -> None:
                 )
             )
 
+    print_rows(rows)
+
+
+def print_rows(rows: list[tuple[str, str, str]]) -> None:
+    """The table: operation, figure, note."""
     width = max(len(r[0]) for r in rows)
     value = max(len(r[1]) for r in rows)
     print(f"{'operation':<{width}}  {'time':>{value}}  note")

@@ -1,13 +1,26 @@
 """``synth replay``: run an AL program on the simulated arm — parsing, I/O and printing only.
 
     synth replay PROGRAM.al|- --task TASK.yaml [--trials N] [--seed S] [--workers K] [--json]
-                 [--progress] [--export-trajectory OUT.yaml|OUT.csv]
+                 [--progress] [--failures K] [--min-success P]
+                 [--export-trajectory OUT.yaml|OUT.csv] [--svg MC.svg] [--trace T.json]
+    synth replay PROGRAM.al --task TASK.yaml --trials N --dask ADDRESS|local
+    synth replay PROGRAM.al --task TASK.yaml --trial I [--seed S] [--json] [--trace T.json]
     synth replay --preamble --task TASK.yaml
 
-Exit codes: 0 when the program is valid and its nominal run succeeds; 1 when the nominal run
-fails (abort, violation, pin not seated); 2 for unusable input — a syntax error, a missing or
+Exit codes: 0 when the program is valid and its nominal run succeeds (and, with
+``--min-success P``, the observed Monte Carlo success rate k/n is at least P — the rate, as
+the proof compares it, not its Wilson bound); 1 when the nominal run fails (abort, violation,
+pin not seated) or the rate is below P; 2 for unusable input — a syntax error, a missing or
 invalid file, or an AL runtime error such as an unknown frame name (the report is still printed
-for the last). ``--preamble`` prints the task's world binding as AL declarations and exits 0.
+for the last); 130 when Ctrl-C stopped the trials (the report of the trials done is printed).
+``--preamble`` prints the task's world binding as AL declarations and exits 0.
+
+``--json`` streams one record per trial (index, seed, the error parameters each perturbed
+frame sampled, outcome, AL line, message, time) into a ``"trials"`` array ahead of the report's
+own keys, written as the trials finish: nothing is kept per trial. ``--failures K`` keeps the
+first K failing trials (at most K records) and prints them after the summary. ``--trial I``
+re-runs trial I of ``--seed`` alone (no nominal run): the same world and hand errors it had in
+the full run.
 
 This module imports nothing heavy at import time, so ``synth --help`` stays fast.
 """
@@ -15,6 +28,7 @@ This module imports nothing heavy at import time, so ``synth --help`` stays fast
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import sys
@@ -213,13 +227,6 @@ def add_replay_parser(sub: Any) -> None:
         "pin poses, events with their AL lines (docs/trace.md)",
     )
     p.add_argument(
-        "--trial",
-        type=int,
-        default=None,
-        metavar="I",
-        help="with --trace: record Monte Carlo trial I of --seed instead of the nominal run",
-    )
-    p.add_argument(
         "--progress",
         action="store_true",
         help="draw the progress bar on stderr even when it is not a terminal",
@@ -229,6 +236,36 @@ def add_replay_parser(sub: Any) -> None:
         metavar="OUT.yaml|OUT.csv",
         help="write the nominal run's joint trajectory: a ROS trajectory_msgs/JointTrajectory "
         "(.yaml) or CSV, each point marked with its AL line and whether it is guarded",
+    )
+    p.add_argument(
+        "--failures",
+        type=int,
+        default=0,
+        metavar="K",
+        help="print the first K failing trials with the errors each sampled",
+    )
+    p.add_argument(
+        "--trial",
+        type=int,
+        default=None,
+        metavar="I",
+        help="re-run Monte Carlo trial I of --seed alone (its sampled world, outcome, line); "
+        "with --trace, record that trial instead of the nominal run",
+    )
+    p.add_argument(
+        "--min-success",
+        type=float,
+        default=None,
+        metavar="P",
+        help="exit 1 when the observed Monte Carlo success rate is below P (0–1; the rate "
+        "itself is compared, as the proof does, not its Wilson bound)",
+    )
+    p.add_argument(
+        "--dask",
+        default=None,
+        metavar="ADDRESS",
+        help="run the trials on the Dask cluster whose scheduler is at ADDRESS, or on a new "
+        "local cluster of --workers processes with 'local' (needs the dask extra)",
     )
     p.set_defaults(func=run_replay)
 
@@ -306,23 +343,78 @@ def run_replay(args: argparse.Namespace) -> int:
         raise SynthError("give the PROGRAM.al to replay (or --preamble to print the binding)")
     if args.trials < 0:
         raise SynthError(f"--trials must be 0 or more, got {args.trials}")
+    _check_diagnostics(args)
     workers = resolve_workers(args.workers)
     if args.svg is not None:
         picture_format(args.svg)
         if args.trials == 0:
             raise SynthError("--svg draws the Monte Carlo trials: give --trials 1 or more")
-    if args.trial is not None and (args.trace is None or args.trial < 0):
-        raise SynthError("--trial I records trial I ≥ 0 and needs --trace TRACE.json")
+    if args.trial is not None and args.svg is not None:
+        raise SynthError("--svg draws many trials; --trial I re-runs one")
     export = args.export_trajectory
     if export is not None and not export.lower().endswith((".yaml", ".yml", ".csv")):
         raise SynthError(f"--export-trajectory {export}: the file must end in .yaml or .csv")
     text = read_program(args.program)
+    if args.trial is not None:
+        if args.trace is not None:
+            _write_trace(args, text)
+        return _run_one(args, text)
 
     from synth.replay.report import replay_summary
-    from synth.replay.run import replay
 
     show = args.trials >= BAR_MIN_TRIALS and (args.progress or sys.stderr.isatty())
     bar = ProgressBar(sys.stderr) if show else None
+    records = _TrialOutput(sys.stdout, args.failures, stream_json=args.json)
+    with contextlib.ExitStack() as stack:
+        client = None
+        if args.dask is not None and args.trials:
+            from synth.replay.cluster import dask_client
+
+            client = stack.enter_context(dask_client(args.dask, workers))
+        report = _replay_with(args, text, workers, bar, records, client)
+    if args.svg is not None:
+        _write_montecarlo(args, report)
+    if args.trace is not None:
+        _write_trace(args, text)
+    if args.json:
+        records.finish(report.to_json())
+    else:
+        print(replay_summary(report))
+        if args.distribution is not None and args.trials:
+            print(f"  errors: every block sampled {args.distribution} (--distribution)")
+        records.print_failures()
+        if args.svg is not None:
+            print(f"Monte Carlo picture written to {args.svg}")
+        if args.trace is not None:
+            print(f"trace of the nominal run written to {args.trace}")
+    if args.export_trajectory is not None:
+        _export(args, text, report)
+    if report.interrupted:
+        return 130
+    if not report.ok:
+        return 2 if report.nominal.outcome == "error" else 1
+    rate = report.monte_carlo.success_rate
+    if args.min_success is not None and rate is not None and rate < args.min_success:
+        if not args.json:
+            print(
+                f"  below --min-success {args.min_success:g}: observed rate {rate:.4f}",
+                file=sys.stderr,
+            )
+        return 1
+    return 0
+
+
+def _replay_with(
+    args: argparse.Namespace,
+    text: str,
+    workers: int,
+    bar: ProgressBar | None,
+    records: _TrialOutput,
+    client: Any,
+) -> Any:
+    """The replay of ``args`` (on ``client``'s Dask cluster when given); the bar closed."""
+    from synth.replay.run import replay
+
     try:
         report = replay(
             text,
@@ -333,38 +425,125 @@ def run_replay(args: argparse.Namespace) -> int:
             filename=_display_name(args.program),
             progress=bar,
             distribution=args.distribution,
+            on_trial=records if records.wanted else None,
+            failures_only=not args.json,
+            client=client,
         )
     finally:
         if bar is not None:
             bar.close()
-    if args.svg is not None:
-        _write_montecarlo(args, report)
-    if args.trace is not None:
-        _write_trace(args, text)
-    if args.json:
-        print(json.dumps(report.to_json(), indent=2))
-    else:
-        print(replay_summary(report))
-        if args.distribution is not None and args.trials:
-            print(f"  errors: every block sampled {args.distribution} (--distribution)")
-        if args.svg is not None:
-            print(f"Monte Carlo picture written to {args.svg}")
-        if args.trace is not None:
-            which = "nominal run" if args.trial is None else f"trial {args.trial}"
-            print(f"trace of the {which} written to {args.trace}")
-    if args.export_trajectory is not None:
-        if report.nominal.outcome != "success":
-            print("synth replay: no trajectory exported: the nominal run failed", file=sys.stderr)
-        else:
-            from synth.replay.trajectory import export_trajectory, write_trajectory
+    return report
 
-            trajectory = export_trajectory(text, args.task, filename=_display_name(args.program))
-            write_trajectory(trajectory, args.export_trajectory)
-            print(
-                f"trajectory of {len(trajectory.points)} points written to "
-                f"{args.export_trajectory}",
-                file=sys.stderr if args.json else sys.stdout,
-            )
-    if report.ok:
+
+def _check_diagnostics(args: argparse.Namespace) -> None:
+    """Usage errors of ``--failures``, ``--trial`` and ``--min-success``."""
+    if args.failures < 0:
+        raise SynthError(f"--failures must be 0 or more, got {args.failures}")
+    if args.trial is not None and args.trial < 0:
+        raise SynthError(f"--trial must be 0 or more, got {args.trial}")
+    if args.min_success is not None and not 0.0 <= args.min_success <= 1.0:
+        raise SynthError(f"--min-success must be between 0 and 1, got {args.min_success:g}")
+
+
+def _run_one(args: argparse.Namespace, text: str) -> int:
+    """``--trial I``: trial I alone; exit 0 if it succeeds, 2 for an AL error, else 1."""
+    from synth.replay.run import replay_one
+
+    record = replay_one(
+        text,
+        args.task,
+        args.trial,
+        seed=args.seed,
+        filename=args.program,
+        distribution=args.distribution,
+    )
+    if args.json:
+        print(json.dumps(record.to_json(), indent=2))
+    else:
+        print(f"replay {args.program}: trial {args.trial} of seed {args.seed} alone")
+        print(_describe_trial(record))
+    if record.run.success:
         return 0
-    return 2 if report.nominal.outcome == "error" else 1
+    return 2 if record.run.outcome == "error" else 1
+
+
+def _export(args: argparse.Namespace, text: str, report: Any) -> None:
+    """``--export-trajectory``: the nominal run's joint trajectory (YAML or CSV)."""
+    if report.nominal.outcome != "success":
+        print("synth replay: no trajectory exported: the nominal run failed", file=sys.stderr)
+        return
+    from synth.replay.trajectory import export_trajectory, write_trajectory
+
+    trajectory = export_trajectory(text, args.task, filename=_display_name(args.program))
+    write_trajectory(trajectory, args.export_trajectory)
+    print(
+        f"trajectory of {len(trajectory.points)} points written to {args.export_trajectory}",
+        file=sys.stderr if args.json else sys.stdout,
+    )
+
+
+def _describe_trial(record: Any) -> str:
+    """A trial as text: outcome, AL line, message, time, and the errors it sampled."""
+    run = record.run
+    where = f" at line {run.line}" if run.line is not None else ""
+    lines = [f"trial {record.index}: {run.outcome}{where}: {run.message}; {run.time:.2f} s"]
+    for v in run.violations:
+        lines.append(f"  violation: {v.kind} at line {v.line}: {v.detail}")
+    for frame, values in record.errors.items():
+        parts = ", ".join(
+            f"{name} {value * 100:+.4f} cm"
+            if name in ("x", "y", "z")
+            else f"{name} {value * 57.29577951308232:+.4f}°"
+            for name, value in values.items()
+        )
+        lines.append(f"  {frame}: {parts}")
+    return "\n".join(lines)
+
+
+class _TrialOutput:
+    """Where trial records go: into the ``--json`` object, or the first ``K`` failures.
+
+    Memory stays bounded: JSON records are written as they arrive, and at most ``K`` failures
+    are kept for the text report.
+    """
+
+    def __init__(self, stream: TextIO, failures: int, *, stream_json: bool) -> None:
+        self.stream = stream
+        self.limit = failures
+        self.stream_json = stream_json
+        self.failures: list[Any] = []
+        self.count = 0
+
+    @property
+    def wanted(self) -> bool:
+        """Whether the replay should pass trial records at all."""
+        return self.stream_json or self.limit > 0
+
+    def __call__(self, record: Any) -> None:
+        if self.stream_json:
+            head = '{\n  "trials": [\n    ' if self.count == 0 else ",\n    "
+            self.stream.write(head + json.dumps(record.to_json()))
+            self.stream.flush()
+        elif len(self.failures) < self.limit:
+            self.failures.append(record)
+        self.count += 1
+
+    def finish(self, report: dict[str, Any]) -> None:
+        """Close the JSON object: the trials array, then the report's own keys."""
+        rest = json.dumps(report, indent=2)
+        if self.count == 0:
+            self.stream.write('{\n  "trials": [],\n' + rest[2:] + "\n")
+        else:
+            self.stream.write("\n  ],\n" + rest[2:] + "\n")
+        self.stream.flush()
+
+    def print_failures(self) -> None:
+        """The kept failures, each with its sampled world."""
+        if not self.limit:
+            return
+        if not self.failures:
+            print("failures: none")
+            return
+        print(f"first {len(self.failures)} failing trial(s):")
+        for record in self.failures:
+            print(_describe_trial(record))

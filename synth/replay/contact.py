@@ -97,6 +97,13 @@ class _Mouths:
         offsets = pin_pose.translation[None, :] - self.origins
         return np.einsum("ij,ij->i", offsets, self.axes)
 
+    def placement(self, pin_pose: pin.SE3) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Height [m] of the tip centre above each mouth plane and its distance from the axis."""
+        offsets = pin_pose.translation[None, :] - self.origins
+        axial = np.einsum("ij,ij->i", offsets, self.axes)
+        radial = offsets - axial[:, None] * self.axes
+        return axial, np.sqrt(np.einsum("ij,ij->i", radial, radial))
+
 
 class _Pin:
     def __init__(self, model: PinModel) -> None:
@@ -123,6 +130,17 @@ class _Pin:
         on_pin = np.asarray(self.result.getNearestPoint1(), dtype=float)
         return float(d), normal, point, on_pin
 
+    def gap(self, pose: pin.SE3, target: _Target, exact: bool) -> float:
+        """The distance [m] of :meth:`distance` alone (no witness points copied out)."""
+        geometry = target.obstacle.geometry if exact else target.hull
+        self.result.clear()
+        tf = coal.Transform3s(pose.rotation, pose.translation)
+        return float(
+            coal.distance(
+                self.model.geometry, tf, geometry, target.transform, self.request, self.result
+            )
+        )
+
 
 def _bound(pin_: _Pin, pose: pin.SE3, target: _Target) -> tuple[float, bool]:
     """A lower bound on the distance and whether it is exact enough to stop on."""
@@ -136,6 +154,137 @@ def _bound(pin_: _Pin, pose: pin.SE3, target: _Target) -> tuple[float, bool]:
     return pin_.distance(pose, target, exact=True)[0], True
 
 
+_SLACK = 1e-6
+"""[m] margin on the lower bounds of :func:`first_contact`'s lazy queries, above the rounding
+of GJK's distances; a target whose bound comes within it of deciding a step is measured."""
+
+
+class _Track:
+    """One target's distances measured along one path: the lower bounds of the fast path.
+
+    The pin's points move at most ``speed`` per unit s, so a distance d measured at s₀ is at
+    least d − speed·|s − s₀| at s, for the hull and for the mesh alike.
+    """
+
+    def __init__(self, target: _Target) -> None:
+        self.target = target
+        self.hull, self.s_hull = -np.inf, 0.0
+        self.mesh, self.s_mesh = -np.inf, 0.0
+
+    def lower(self, s: float, speed: float) -> float:
+        """A lower bound [m] on what :func:`_bound` returns at ``s`` once the sphere test fails.
+
+        :func:`_bound` returns the hull distance h when h > ``_NEAR`` (or the hull is the
+        solid), else the mesh distance m ≥ h; so it is at least max(H, min(_NEAR, M)) with H
+        and M the hull's and mesh's Lipschitz bounds.
+        """
+        lb_hull = self.hull - speed * abs(s - self.s_hull)
+        if self.target.exact_hull:
+            return lb_hull - _SLACK
+        lb_mesh = self.mesh - speed * abs(s - self.s_mesh)
+        return max(lb_hull, min(_NEAR, lb_mesh)) - _SLACK
+
+    def measure(self, pin_: _Pin, pose: pin.SE3, s: float) -> tuple[float, bool]:
+        """:func:`_bound`'s value and exactness at ``s`` past the sphere test, recorded."""
+        target = self.target
+        d = pin_.gap(pose, target, exact=False)
+        self.hull, self.s_hull = d, s
+        if d > _NEAR or target.exact_hull:
+            return d, target.exact_hull
+        d = pin_.gap(pose, target, exact=True)
+        self.mesh, self.s_mesh = d, s
+        return d, True
+
+
+def _first_contact_fast(
+    pin_model: PinModel,
+    pose_at: PoseAt,
+    speed: float,
+    obstacles: Sequence[Obstacle],
+    holes: Sequence[HoleSite],
+    start: float,
+    end: float,
+    clearance: float,
+    friction: float | None,
+) -> PinContact | None:
+    """:func:`first_contact` measuring only the targets that can decide a step.
+
+    Every step of the reference loop takes, per target, the bound d_k of :func:`_bound`; it
+    stops at the first target (in order) whose exact d_k is within its limit, else steps by
+    min_k (d_k − ½·limit_k)/speed. Here the sphere bounds are computed for every target
+    (one product), and a target past the sphere test is measured only when its lower bound
+    (:class:`_Track`) reaches its limit or the smallest value found so far; the others are
+    strictly above both, so the stop, the step and the contact are the reference's.
+
+    A hole's mouth crossing is located (bisection) only if its tip circle can be inside the
+    mouth there: the tip centre's distance from the axis is 1-Lipschitz in its position, so
+    over [s, s'] it is at least (ℓ(s) + ℓ(s') − speed·(s' − s))/2; above the mouth radius no
+    capture is possible (:func:`captures` needs ℓ ≤ r_m), and the reference would only find
+    that out after bisecting.
+    """
+    pin_ = _Pin(pin_model)
+    targets = [_Target(o) for o in obstacles]
+    tracks = [_Track(t) for t in targets]
+    centres = np.array([t.centre for t in targets]).reshape(-1, 3)
+    radii = np.array([t.radius for t in targets])
+    mouth_radii = np.array([h.mouth_radius for h in holes])
+    s = start
+    pose = pose_at(s)
+    limits = [clearance] * len(targets)
+    for k, target in enumerate(targets):
+        d0, exact = _bound(pin_, pose, target)
+        if exact and d0 <= clearance:
+            limits[k] = 0.5 * d0
+    mouths = _Mouths(holes)
+    axial, lateral = mouths.placement(pose)
+    for _ in range(_MAX_STEPS):
+        gaps = np.linalg.norm(pose.act(pin_.centre)[None, :] - centres, axis=1)
+        spheres = gaps - pin_.radius - radii
+        values: list[float | None] = [None] * len(targets)
+        for k, track in enumerate(tracks):
+            if spheres[k] > _FAR:
+                values[k] = float(spheres[k])
+            elif track.lower(s, speed) <= limits[k]:
+                d, exact = track.measure(pin_, pose, s)
+                if exact and d <= limits[k]:
+                    return _classify(pin_, pose, s, targets[k], holes, friction)
+                values[k] = d
+        step_d = min(
+            (v - 0.5 * lim for v, lim in zip(values, limits, strict=True) if v is not None),
+            default=np.inf,
+        )
+        for k, track in enumerate(tracks):
+            if values[k] is None and track.lower(s, speed) - 0.5 * limits[k] <= step_d:
+                d, _ = track.measure(pin_, pose, s)
+                values[k] = d
+                step_d = min(step_d, d - 0.5 * limits[k])
+        if s >= end:
+            return None
+        if speed <= 0.0:
+            return None
+        s_next = min(end, s + max(step_d, 0.0) / speed)
+        if s_next <= s:  # numerically stuck at a touching obstacle
+            s_next = min(end, s + 1e-9)
+        pose_next = pose_at(s_next)
+        axial_next, lateral_next = mouths.placement(pose_next)
+        crossed = np.flatnonzero((axial > 0.0) & (axial_next <= 0.0))
+        reach = 0.5 * (lateral + lateral_next - speed * (s_next - s)) - _SLACK
+        for index in crossed.tolist():
+            if reach[index] > mouth_radii[index]:
+                continue  # no point of [s, s_next] has the tip circle inside the mouth
+            hole = holes[index]
+            crossing = _crossing(hole, pose_at, s, s_next)
+            placement = tip_placement(hole, pose_at(crossing))
+            if captures(hole, pin_model, placement):
+                axis = hole.axis
+                point = hole.world_from_hole.translation.copy()
+                kind = _entry(hole, pin_model, placement, friction)
+                return PinContact(crossing, kind, hole.owner, hole, axis, point, np.zeros(3), 0.0)
+        axial, lateral = axial_next, lateral_next
+        s, pose = s_next, pose_next
+    raise RuntimeError("pin contact search did not converge")
+
+
 def first_contact(
     pin_model: PinModel,
     pose_at: PoseAt,
@@ -147,8 +296,12 @@ def first_contact(
     end: float = 1.0,
     clearance: float = 2e-5,
     friction: float | None = None,
+    reference: bool = False,
 ) -> PinContact | None:
     """The first contact of the pin over s ∈ [start, end], or None (see the module docstring).
+
+    ``reference`` measures every target at every step; the default measures only those that
+    can decide a step (:func:`_first_contact_fast`) and finds the same contact.
 
     With ``friction`` (μ) a capture at a tilt that wedges the pin is a ``wedge`` contact.
 
@@ -157,6 +310,10 @@ def first_contact(
     ``clearance`` to an obstacle (it rests where a previous motion stopped it) counts as
     touching that obstacle only below half its starting distance.
     """
+    if not reference:
+        return _first_contact_fast(
+            pin_model, pose_at, speed, obstacles, holes, start, end, clearance, friction
+        )
     pin_ = _Pin(pin_model)
     targets = [_Target(o) for o in obstacles]
     s = start

@@ -68,7 +68,7 @@ import contextlib
 import itertools
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import partial
 from typing import Literal, NoReturn
 
@@ -104,7 +104,8 @@ from synth.models.arm import (
     swept_segment,
 )
 from synth.models.arm.bodies import Body
-from synth.models.arm.sweep import body_motion_bounds
+from synth.models.arm.collision import SceneCache
+from synth.models.arm.sweep import LAZY_SLACK, body_motion_bounds
 from synth.models.workcell import HoleSite, PinModel, Workcell
 from synth.replay.capture import inserted_depth, seat_depth, seated_pose, tip_placement
 from synth.replay.contact import first_contact, guided_motion, scrape
@@ -165,6 +166,11 @@ class ReplayOptions:
     """[s] simulated time one run may take; past it the run is an AL runtime error."""
     max_wall_time: float = MAX_WALL_TIME
     """[s] real time one run may take (a loop of motions that take no simulated time)."""
+    reference: bool = False
+    """Take the reference path: every distance measured at every step of every sweep and
+    contact search, the collision scene rebuilt for every grasp and opening. The fast path
+    (the default) measures only what can decide a step and reuses scenes; both give the same
+    runs (``benchmarks/replay.py`` times one against the other)."""
 
 
 class ViolationStop(Exception):
@@ -220,9 +226,11 @@ class ReplayMachine(MotionGate):
 
     ``hand_errors`` is the stream of hand positioning errors (:class:`HandErrors.none` for the
     nominal run); ``q_start`` the arm's initial configuration (the hand at the task's park
-    frame). Every violation is kept in :attr:`violations` before :class:`ViolationStop` is
-    raised. ``observer`` (None: nobody) is told how far each motion has been played, on the
-    machine's own timeline (:class:`~synth.replay.motion.MotionObserver`).
+    frame); ``scenes`` a cache of collision scenes shared by the runs of one process (none: a
+    scene is built for every grasp and opening). Every violation is kept in
+    :attr:`violations` before :class:`ViolationStop` is raised. ``observer`` (None: nobody)
+    is told how far each motion has been played, on the machine's own timeline
+    (:class:`~synth.replay.motion.MotionObserver`).
     """
 
     def __init__(
@@ -233,8 +241,10 @@ class ReplayMachine(MotionGate):
         q_start: NDArray[np.float64],
         hand_errors: HandErrors,
         options: ReplayOptions | None = None,
+        scenes: SceneCache | None = None,
     ) -> None:
         self.arm = arm
+        self.scenes = scenes
         self.workcell = workcell
         self.options = options or ReplayOptions()
         self.hand_errors = hand_errors
@@ -331,9 +341,14 @@ class ReplayMachine(MotionGate):
                 holder = HeldObject(held.model.name, held.model.geometry, held.grip)
                 allowed += [(finger, held.model.name) for finger in FINGERS]
                 allowed += [(held.model.name, o.name) for o in obstacles]  # swept on its own
-            self._scene = CollisionScene(
-                self.arm, obstacles, held=holder, allowed=allowed, opening=self._opening
-            )
+            if self.scenes is not None and not self.options.reference:
+                self._scene = self.scenes.scene(
+                    self.arm, obstacles, held=holder, allowed=allowed, opening=self._opening
+                )
+            else:
+                self._scene = CollisionScene(
+                    self.arm, obstacles, held=holder, allowed=allowed, opening=self._opening
+                )
         return self._scene
 
     def _invalidate(self) -> None:
@@ -564,6 +579,7 @@ class ReplayMachine(MotionGate):
                     start=s,
                     clearance=options.contact_clearance,
                     friction=self.workcell.friction,
+                    reference=options.reference,
                 )
                 if found is None:
                     s = 1.0
@@ -656,10 +672,21 @@ class ReplayMachine(MotionGate):
         options = self.options.sweep
         if not scene.pairs:
             return options
-        start = float(np.min(scene.distance_bounds(q, exact_below=options.clearance)))
+        if self.options.reference:
+            start = float(np.min(scene.distance_bounds(q, exact_below=options.clearance)))
+        else:
+            # only pairs whose lower bound reaches the clearance can be below it
+            options = replace(options, lazy=True)
+            below = np.full(len(scene.pairs), options.clearance)
+            lower = scene.lower_bounds(q, below) - LAZY_SLACK
+            close = np.flatnonzero(lower <= below).tolist()
+            near = [scene.measure(k, options.clearance) for k in close]
+            start = min(near, default=np.inf)
         if start >= options.clearance:
             return options
-        return SweepOptions(clearance=max(0.5 * start, 0.0), max_checks=options.max_checks)
+        return SweepOptions(
+            clearance=max(0.5 * start, 0.0), max_checks=options.max_checks, lazy=options.lazy
+        )
 
     def _sweep(self, scene: CollisionScene, seg: Segment, limit: float, line: int) -> Stop | None:
         """Sweep the arm and hand over s ∈ [0, limit] of ``seg``: the first stop, if any.

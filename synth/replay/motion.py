@@ -43,6 +43,10 @@ __all__ = [
 ]
 
 
+_EYE = np.eye(3)
+_EYE.flags.writeable = False
+
+
 def quintic(tau: float) -> float:
     """s(τ) = 10τ³ − 15τ⁴ + 6τ⁵, the rest-to-rest quintic time law."""
     tau = min(max(tau, 0.0), 1.0)
@@ -113,6 +117,7 @@ class Segment:
         self._angle = float(np.linalg.norm(turn))
         self._axis = turn / self._angle if self._angle > 0.0 else np.zeros(3)
         self._skew = pin.skew(self._axis)
+        self._skew2 = self._skew @ self._skew
         self._r0 = np.array(self.e0.rotation)
         self._t0 = np.array(self.e0.translation)
         self._shift = np.array(self.e1.translation) - self._t0
@@ -125,8 +130,7 @@ class Segment:
         if self._angle == 0.0:
             return self._r0, self._t0 + s * self._shift
         a = s * self._angle
-        k = self._skew
-        turn = np.eye(3) + math.sin(a) * k + (1.0 - math.cos(a)) * (k @ k)
+        turn = _EYE + math.sin(a) * self._skew + (1.0 - math.cos(a)) * self._skew2
         return self._r0 @ turn, self._t0 + s * self._shift
 
     def error(self, s: float) -> pin.SE3:

@@ -161,6 +161,10 @@ class ReplayReport:
     nominal: RunReport
     monte_carlo: MonteCarloReport
     trials: tuple[RunReport, ...] = ()
+    interrupted: bool = False
+    """The trials were stopped (Ctrl-C) after ``monte_carlo.trials`` of ``planned``."""
+    planned: int | None = None
+    """Trials asked for (None: as many as ``monte_carlo.trials``)."""
 
     @property
     def ok(self) -> bool:
@@ -169,11 +173,14 @@ class ReplayReport:
 
     def to_json(self) -> dict[str, Any]:
         """The report as JSON (issue 6 shape, SI units)."""
-        return {
+        out: dict[str, Any] = {
             "ok": self.ok,
             "nominal": self.nominal.to_json(),
             "monte_carlo": self.monte_carlo.to_json(),
         }
+        if self.interrupted:
+            out["interrupted"] = {"done": self.monte_carlo.trials, "planned": self.planned}
+        return out
 
 
 def _seconds(value: float | None) -> str:
@@ -203,4 +210,9 @@ def replay_summary(report: ReplayReport) -> str:
         lines.append(f"  time: mean {_seconds(mc.time_mean)}, p95 {_seconds(mc.time_p95)}")
     else:
         lines.append("Monte Carlo: no trials")
+    if report.interrupted:
+        lines.append(
+            f"  interrupted: {mc.trials} of {report.planned} trials done (Ctrl-C); "
+            "the figures above are over those"
+        )
     return "\n".join(lines)

@@ -28,8 +28,9 @@ hand clear; a task without an insertion succeeds by running to its end) and ``fa
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -42,6 +43,7 @@ from synth.al.parser import parse_program
 from synth.errors.locate import believed_graph
 from synth.exceptions import ALRuntimeError, SpecError
 from synth.models.arm import Arm, manipulator_arm
+from synth.models.arm.collision import SceneCache
 from synth.models.graph import AttributeGraph, pose_to_se3
 from synth.models.loader import load_task
 from synth.models.park import nominal_environment, park_configuration
@@ -55,10 +57,13 @@ from synth.replay.truth import HandErrors, TrueWorld, nominal_world, sample_worl
 
 __all__ = [
     "ReplayContext",
+    "TrialRecord",
+    "TrialSink",
     "build_context",
     "machine_for",
     "replay",
     "replay_graph",
+    "replay_one",
     "replay_program",
     "run_machine",
     "run_nominal",
@@ -66,6 +71,7 @@ __all__ = [
     "run_world",
     "summarise",
     "trial_errors",
+    "trial_record",
     "trial_seed",
     "trial_world",
     "world_errors",
@@ -93,6 +99,8 @@ class ReplayContext:
     park: pin.SE3
     q_park: NDArray[np.float64]
     options: ReplayOptions
+    scenes: SceneCache = field(default_factory=SceneCache)
+    """Collision scenes shared by this context's runs (moved to each trial's poses)."""
 
 
 def build_context(
@@ -159,7 +167,15 @@ def machine_for(context: ReplayContext, world: TrueWorld, hand_errors: HandError
     """A fresh machine in ``world``: the hand at the park pose, every pin where it truly is."""
     workcell = context.workcell.place(world)
     pins = {frame: world.pose(frame) for frame in workcell.pins}
-    return ReplayMachine(context.arm, workcell, pins, context.q_park, hand_errors, context.options)
+    return ReplayMachine(
+        context.arm,
+        workcell,
+        pins,
+        context.q_park,
+        hand_errors,
+        context.options,
+        scenes=context.scenes,
+    )
 
 
 def run_machine(context: ReplayContext, machine: ReplayMachine) -> tuple[RunReport, Interpreter]:
@@ -267,6 +283,69 @@ def world_errors(graph: AttributeGraph, seed: int, index: int) -> dict[str, dict
     return {frame: dict(values) for frame, values in world.parameters.items()}
 
 
+@dataclass(frozen=True)
+class TrialRecord:
+    """One Monte Carlo trial, for diagnosis: its index, seed, sampled errors and its run.
+
+    ``errors`` maps every perturbed frame to the error parameters trial ``index`` drew for it
+    [m, rad] (:func:`trial_errors`; the hand's positioning errors, drawn per motion target,
+    are not listed); ``run`` is the trial's report.
+    """
+
+    index: int
+    seed: int
+    errors: dict[str, dict[str, float]]
+    run: RunReport
+
+    def to_json(self) -> dict[str, Any]:
+        """The record as JSON (SI units).
+
+        ``{"index", "seed", "errors", "outcome", "line", "message", "time", "statements",
+        "violations"}``.
+        """
+        return {"index": self.index, "seed": self.seed, "errors": self.errors, **self.run.to_json()}
+
+
+TrialSink = Callable[[TrialRecord], None]
+"""``on_trial(record)``: called for every trial (or every failing one), in trial order."""
+
+
+def trial_record(context: ReplayContext, seed: int, index: int, run: RunReport) -> TrialRecord:
+    """The :class:`TrialRecord` of trial ``index``'s ``run`` (its errors drawn again)."""
+    return TrialRecord(index, seed, trial_errors(context, seed, index), run)
+
+
+def replay_one(
+    program_text: str,
+    task: TaskSpec | str | Path,
+    index: int,
+    *,
+    seed: int = 0,
+    filename: str = "<al>",
+    base_dir: str | Path | None = None,
+    options: ReplayOptions | None = None,
+    distribution: Distribution | None = None,
+) -> TrialRecord:
+    """Run Monte Carlo trial ``index`` of ``seed`` alone.
+
+    The same world and hand errors as in a full :func:`replay`: a trial depends only on the
+    program, the task, the seed and its index.
+    """
+    if index < 0:
+        raise ValueError(f"the trial index must be ≥ 0, got {index}")
+    if isinstance(task, str | Path) and base_dir is None:
+        base_dir = Path(task).resolve().parent
+    context = build_context(
+        program_text,
+        task,
+        filename=filename,
+        base_dir=base_dir,
+        options=options,
+        distribution=distribution,
+    )
+    return trial_record(context, seed, index, run_trial(context, seed, index))
+
+
 def replay(
     program_text: str,
     task: TaskSpec | str | Path,
@@ -279,6 +358,9 @@ def replay(
     options: ReplayOptions | None = None,
     progress: Progress | None = None,
     distribution: Distribution | None = None,
+    on_trial: TrialSink | None = None,
+    failures_only: bool = False,
+    client: Any | None = None,
 ) -> ReplayReport:
     """Replay ``program_text`` on ``task``: the nominal run and ``trials`` Monte Carlo trials.
 
@@ -286,6 +368,15 @@ def replay(
     process); ``distribution`` overrides the task's sampling distributions. Raises
     ALSyntaxError for a program that does not parse and SpecError (or another
     :class:`~synth.exceptions.SynthError`) for an unusable task.
+
+    ``on_trial`` receives a :class:`TrialRecord` per trial in trial order as it completes
+    (only the failing ones with ``failures_only``), so a caller can stream them: the replay
+    itself keeps no more than its bounded tally. A ``KeyboardInterrupt`` (Ctrl-C) stops the
+    trials at once, workers included: the report then has the trials completed so far and
+    ``interrupted`` set.
+
+    ``client``, a ``distributed.Client``, runs the trials on its Dask cluster instead of
+    ``workers`` local processes (:mod:`synth.replay.cluster`): the same report.
     """
     if trials < 0:
         raise ValueError(f"trials must be ≥ 0, got {trials}")
@@ -302,12 +393,35 @@ def replay(
     nominal = run_nominal(context)
     job = job_for(program_text, context, filename=filename, base_dir=base_dir, options=options)
     tally = TrialTally()  # bounded memory, whatever ``trials`` is
-    with TrialPool(min(workers, max(trials, 1))) as pool:
-        for run in iter_trials(job, context, seed, trials, pool):
-            tally.add(run)
-            if progress is not None:
-                progress(tally.count, trials)
-    return ReplayReport(filename, context.spec.name, nominal, tally.report(seed), tuple(tally.runs))
+    interrupted = False
+    with TrialPool(1 if client is not None else min(workers, max(trials, 1))) as pool:
+        if client is not None:
+            from synth.replay.cluster import iter_trials_on
+
+            runs = iter_trials_on(client, job, seed, trials)
+        else:
+            runs = iter_trials(job, context, seed, trials, pool)
+        try:
+            for run in runs:
+                if on_trial is not None and not (failures_only and run.success):
+                    on_trial(trial_record(context, seed, tally.count, run))
+                tally.add(run)
+                if progress is not None:
+                    progress(tally.count, trials)
+        except KeyboardInterrupt:
+            interrupted = True
+            pool.abort()
+        finally:
+            runs.close()  # cancels what is still queued (pool or cluster)
+    return ReplayReport(
+        filename,
+        context.spec.name,
+        nominal,
+        tally.report(seed),
+        tuple(tally.runs),
+        interrupted=interrupted,
+        planned=trials,
+    )
 
 
 replay_program = replay

@@ -19,6 +19,7 @@ import ast as pyast
 import hashlib
 import multiprocessing
 import os
+import signal
 import sys
 import warnings
 from collections import OrderedDict, deque
@@ -43,6 +44,7 @@ __all__ = [
     "job_for",
     "main_reimport_is_unsafe",
     "max_in_flight",
+    "run_chunk",
     "start_method",
 ]
 
@@ -108,11 +110,21 @@ def _context(job: TrialJob) -> ReplayContext:
     return context
 
 
+def run_chunk(job: TrialJob, seed: int, start: int, stop: int) -> list[RunReport]:
+    """Trials ``start`` … ``stop − 1`` of ``job`` in this process (its context cached)."""
+    return _run_chunk(job, seed, start, stop)
+
+
 def _run_chunk(job: TrialJob, seed: int, start: int, stop: int) -> list[RunReport]:
     from synth.replay.run import run_trial
 
     context = _context(job)
     return [run_trial(context, seed, i) for i in range(start, stop)]
+
+
+def _ignore_interrupts() -> None:
+    """Worker initializer: Ctrl-C is the parent's to handle (it stops the workers itself)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _import_replay() -> None:
@@ -233,6 +245,7 @@ class TrialPool:
             self._executor = ProcessPoolExecutor(
                 max_workers=self.workers,
                 mp_context=multiprocessing.get_context(self.method or "spawn"),
+                initializer=_ignore_interrupts,
             )
         return self._executor
 
@@ -251,6 +264,19 @@ class TrialPool:
         if self._executor is not None:
             self._executor.shutdown(wait=True, cancel_futures=True)
             self._executor = None
+
+    def abort(self) -> None:
+        """Stop now: cancel the queued trials and terminate the workers mid-trial (Ctrl-C)."""
+        executor = self._executor
+        if executor is None:
+            return
+        self._executor = None
+        processes = list((getattr(executor, "_processes", None) or {}).values())
+        executor.shutdown(wait=False, cancel_futures=True)
+        for process in processes:
+            process.terminate()
+        for process in processes:
+            process.join(timeout=1.0)
 
     def __enter__(self) -> TrialPool:
         return self

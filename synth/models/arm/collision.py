@@ -22,7 +22,7 @@ pin, the pin in its hole — and remove exactly those pairs; nothing else is exe
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any, TypeAlias
 
@@ -210,6 +210,15 @@ class CollisionScene:
         self._bound_is_exact = np.array(
             [a not in meshes and b not in meshes for a, b in self.pairs], dtype=bool
         )
+        self._lazy: (
+            tuple[
+                NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]
+            ]
+            | None
+        ) = None
+        self._placed: NDArray[np.float64] | None = None
+        self._exact_last: set[int] = set()
+        self._tight: NDArray[np.float64] | None = None
         index = {n: i for i, n in enumerate(names)}
         self.body_bounds = body_motion_bounds(self.model, arm.limits, self.bodies)
         self.pair_bounds = pair_motion_bounds(
@@ -269,6 +278,50 @@ class CollisionScene:
                 else:
                     excluded[key] = reason
         return tuple(pairs), excluded
+
+    def structure(self) -> tuple[object, ...]:
+        """What fixes the scene's bodies and pairs, poses aside (a :class:`SceneCache` key)."""
+        return _structure(self.arm, self.environment, self.held, self.allowed, self.opening)
+
+    def reposition(self, environment: Iterable[Obstacle], held: HeldObject | None) -> None:
+        """Move the environment bodies and the held object to new poses, in place.
+
+        ``environment`` and ``held`` must have this scene's :meth:`structure` (names, solids,
+        order); only their poses change. Pinocchio's geometry data (and with it Coal's cached
+        GJK guesses) and the lazy distances start afresh, so every query afterwards answers as
+        a newly built scene would.
+        """
+        obstacles = tuple(environment)
+        if _structure(self.arm, obstacles, held, self.allowed, self.opening) != self.structure():
+            raise ArmModelError("reposition: the bodies differ from the scene's")
+        self.environment, self.held = obstacles, held
+        bodies = list(self.bodies)
+        moved = {o.name: o.pose for o in obstacles}
+        hand_frame = self.arm.model.frames[self.arm.hand_frame]
+        for i, body in enumerate(bodies):
+            if body.role == "environment":
+                placement = moved[body.name]
+            elif body.role == "held" and held is not None:
+                placement = hand_frame.placement * held.transform_hand_object
+            else:
+                continue
+            bodies[i] = Body(body.name, body.joint, body.link, placement, body.geometry, body.role)
+            for model in (self.geometry_model, self.bound_model):
+                model.geometryObjects[model.getGeometryId(body.name)].placement = placement
+        self.bodies = tuple(bodies)
+        self.geometry_data = self.geometry_model.createData()
+        self.bound_data = self.bound_model.createData()
+        if held is not None:
+            index = {b.name: i for i, b in enumerate(self.bodies)}
+            self.body_bounds = body_motion_bounds(self.model, self.arm.limits, self.bodies)
+            self.pair_bounds = pair_motion_bounds(
+                self.model,
+                self.bodies,
+                [(index[a], index[b]) for a, b in self.pairs],
+                self.body_bounds,
+            )
+            self._tight = None
+        self.forget()
 
     def with_held(
         self, held: HeldObject | None, allowed: Iterable[Iterable[str]] | None = None
@@ -347,6 +400,81 @@ class CollisionScene:
                 d[k] = exact[int(k)].min_distance
         return d
 
+    @property
+    def tight_pair_bounds(self) -> NDArray[np.float64]:
+        """:attr:`pair_bounds` without the joints that cannot change a pair's distance.
+
+        A body that is a solid of revolution (a Coal cylinder, cone or capsule about its z, or
+        a sphere) whose axis is a revolute joint j's axis, both fixed in the frame of j's parent
+        joint, is carried onto itself by a turn of j; j turns the other body of the pair, and
+        everything under j, rigidly about that same axis, so the pair's distance does not
+        depend on q_j and its term |∂d/∂q_j|·|Δq_j| is zero (the column about θ1, the shoulder
+        about θ2, the wrist sphere about θ6 of the Stanford arm). Every other term stays.
+        """
+        if self._tight is None:
+            self._tight = self.pair_bounds * _symmetry_mask(self.model, self.bodies, self.pairs)
+        return self._tight
+
+    # Lazy per-pair queries (swept checks): each pair's last measured distance and where it
+    # was measured give a lower bound anywhere, so only the pairs that can matter are measured.
+
+    @property
+    def bound_is_exact(self) -> NDArray[np.bool_]:
+        """Per pair, whether its convex-hull distance is its exact distance (no mesh in it)."""
+        return self._bound_is_exact
+
+    def lower_bounds(self, q: ArrayLike, exact_below: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Place every body at ``q``; lower bounds [m] on what :meth:`distance_bounds` returns.
+
+        From pair k's last measured hull distance h_k at q_h and mesh distance m_k at q_m (−∞
+        before any): every distance changes by at most ``pair_bounds[k]·|q − q'|`` between
+        two configurations (:mod:`synth.models.arm.sweep`), so the hull distance at ``q`` is at
+        least H = h_k − pair_bounds[k]·|q − q_h| and the mesh distance at least
+        M = m_k − pair_bounds[k]·|q − q_m|. :meth:`distance_bounds` returns the hull distance
+        where it exceeds ``exact_below`` (or the pair has no mesh), else the mesh distance; both
+        cases are ≥ max(H, min(E, M)). After this call, :meth:`measure` gives pair k's exact
+        :meth:`distance_bounds` value at ``q``.
+        """
+        qa = self._q(q)
+        if self._lazy is None or self._lazy[0].shape[0] != len(self.pairs):
+            n = len(self.pairs)
+            self._lazy = (
+                np.full(n, -np.inf),
+                np.zeros((n, self.model.nv)),
+                np.full(n, -np.inf),
+                np.zeros((n, self.model.nv)),
+            )
+        hull, q_hull, mesh, q_mesh = self._lazy
+        pin.updateGeometryPlacements(self.model, self.data, self.bound_model, self.bound_data, qa)
+        pin.updateGeometryPlacements(self.model, self.data, self.geometry_model, self.geometry_data)
+        self._placed = qa.copy()
+        self._exact_last = set()
+        bounds = self.tight_pair_bounds
+        lb_hull = hull - np.einsum("ij,ij->i", bounds, np.abs(qa[None, :] - q_hull))
+        lb_mesh = mesh - np.einsum("ij,ij->i", bounds, np.abs(qa[None, :] - q_mesh))
+        return np.where(
+            self._bound_is_exact, lb_hull, np.maximum(lb_hull, np.minimum(exact_below, lb_mesh))
+        )
+
+    def measure(self, k: int, exact_below: float) -> float:
+        """Pair ``k``'s :meth:`distance_bounds` value [m] at the last :meth:`lower_bounds` q."""
+        assert self._lazy is not None and self._placed is not None
+        hull, q_hull, mesh, q_mesh = self._lazy
+        pin.computeDistance(self.bound_model, self.bound_data, k)
+        d = float(self.bound_data.distanceResults[k].min_distance)
+        hull[k], q_hull[k] = d, self._placed
+        if d <= exact_below and not self._bound_is_exact[k]:
+            pin.computeDistance(self.geometry_model, self.geometry_data, k)
+            d = float(self.geometry_data.distanceResults[k].min_distance)
+            mesh[k], q_mesh[k] = d, self._placed
+            self._exact_last.add(k)
+        return d
+
+    def forget(self) -> None:
+        """Drop the measured distances (the bodies' placements changed)."""
+        self._lazy = None
+        self._placed = None
+
     def normal(self, k: int) -> NDArray[np.float64]:
         """Unit direction between the closest points of pair ``k`` [1] (zero: none known).
 
@@ -383,6 +511,104 @@ class CollisionScene:
                 for k, v in sorted(self.excluded.items(), key=lambda kv: sorted(kv[0]))
             },
         }
+
+
+_REVOLUTE_AXES = {"JointModelRX": 0, "JointModelRY": 1, "JointModelRZ": 2}
+_ROUND = (coal.Cylinder, coal.Cone, coal.Capsule)
+
+
+def _symmetry_mask(
+    model: pin.Model, bodies: Sequence[Body], pairs: Sequence[Pair]
+) -> NDArray[np.float64]:
+    """Per pair and joint velocity index: 0 where the joint cannot change the pair's distance.
+
+    See :attr:`CollisionScene.tight_pair_bounds`; the axes must coincide within 1e-9 m and rad.
+    """
+    index = {b.name: i for i, b in enumerate(bodies)}
+    supports = [set(model.supports[b.joint]) for b in bodies]
+    mask = np.ones((len(pairs), model.nv))
+    # (body, joint) where a turn of the joint carries the body onto itself
+    invariant: list[tuple[int, int]] = []
+    for i, body in enumerate(bodies):
+        geometry = body.geometry
+        sphere = isinstance(geometry, coal.Sphere)
+        if not (sphere or isinstance(geometry, _ROUND)):
+            continue
+        centre = np.asarray(body.placement.translation)
+        along = np.asarray(body.placement.rotation[:, 2])
+        for j in range(1, model.njoints):
+            axis_index = _REVOLUTE_AXES.get(model.joints[j].shortname())
+            if axis_index is None or model.parents[j] != body.joint:
+                continue
+            placement = model.jointPlacements[j]
+            direction = np.asarray(placement.rotation[:, axis_index])
+            offset = centre - np.asarray(placement.translation)
+            off_axis = float(np.linalg.norm(np.cross(offset, direction)))
+            parallel = sphere or float(np.linalg.norm(np.cross(along, direction))) < 1e-9
+            if parallel and off_axis < 1e-9:
+                invariant.append((i, j))
+    for k, (a, b) in enumerate(pairs):
+        ia, ib = index[a], index[b]
+        for i, j in invariant:
+            other = ib if i == ia else ia if i == ib else None
+            if other is not None and j in supports[other] and j not in supports[i]:
+                mask[k, model.joints[j].idx_v] = 0.0
+    return mask
+
+
+def _structure(
+    arm: Arm,
+    environment: Iterable[Obstacle],
+    held: HeldObject | None,
+    allowed: Iterable[Iterable[str]],
+    opening: float | None,
+) -> tuple[object, ...]:
+    """The bodies and allowed pairs of a scene by name and solid (identity), poses aside."""
+    return (
+        id(arm),
+        tuple((o.name, id(o.geometry)) for o in environment),
+        None if held is None else (held.name, id(held.geometry)),
+        frozenset(frozenset(p) for p in allowed),
+        arm.hand.max_opening if opening is None else float(opening),
+    )
+
+
+class SceneCache:
+    """Collision scenes kept by structure and moved to each use's poses.
+
+    Building a scene (geometry objects, hulls, pair lists, motion bounds) costs far more than
+    moving its bodies; a replay builds the same few scenes in every trial, with only the
+    object poses and the grasp differing. :meth:`scene` returns a cached scene
+    :meth:`~CollisionScene.reposition`-ed to the given poses, which answers every query as a
+    newly built one would. Not thread-safe; one per process (a replay context holds one).
+    """
+
+    def __init__(self, size: int = 16) -> None:
+        self.size = size
+        self._scenes: dict[tuple[object, ...], CollisionScene] = {}
+
+    def scene(
+        self,
+        arm: Arm,
+        environment: Iterable[Obstacle],
+        *,
+        held: HeldObject | None = None,
+        allowed: Iterable[Iterable[str]] = (),
+        opening: float | None = None,
+    ) -> CollisionScene:
+        """A scene of these bodies at these poses (cached by structure)."""
+        obstacles = tuple(environment)
+        pairs = [tuple(p) for p in allowed]
+        key = _structure(arm, obstacles, held, pairs, opening)
+        cached = self._scenes.get(key)
+        if cached is None:
+            cached = CollisionScene(arm, obstacles, held=held, allowed=pairs, opening=opening)
+            if len(self._scenes) >= self.size:
+                self._scenes.pop(next(iter(self._scenes)))
+            self._scenes[key] = cached
+        else:
+            cached.reposition(obstacles, held)
+        return cached
 
 
 def environment_from(items: Iterable[EnvironmentItem]) -> tuple[Obstacle, ...]:

@@ -178,6 +178,10 @@ class SweepOptions:
     rigid: frozenset[str] = frozenset()
     """Bodies that move together (the arm's links, the hand and the held pin under one hand
     error): a pair of them keeps the clearance only."""
+    lazy: bool = False
+    """Measure only the pairs that can decide a step (:func:`_advance_lazy`): the same steps,
+    stops and pairs as measuring every pair, with far fewer distance queries. Used without
+    :attr:`displacements` only."""
 
     def pair_margins(self, pairs: Sequence[tuple[str, str]]) -> NDArray[np.float64]:
         """The margins [m] of each pair in any direction (displacements at their ball bound).
@@ -254,9 +258,11 @@ def _advance(
     options: SweepOptions,
 ) -> SweepResult:
     """Conservative advancement over s ∈ [0, end]: q = position(s), |dq_j/ds| ≤ rates_j."""
+    directional = options.directional(scene.pairs)
+    if options.lazy and not directional.size and scene.pairs:
+        return _advance_lazy(scene, position, end, rates, options)
     bounds = scene.pair_bounds @ rates  # M per pair [m per unit s]
     margins = options.pair_margins(scene.pairs)
-    directional = options.directional(scene.pairs)
     s, checks = 0.0, 0
     while True:
         q = position(s)
@@ -284,6 +290,78 @@ def _advance(
             return SweepResult(False, s, q, scene.pairs[k], float(d[k]), checks, need)
         moving = bounds > 0
         step = float(np.min(gap[moving] / bounds[moving])) if np.any(moving) else end - s
+        s = min(end, s + step)
+
+
+LAZY_SLACK = 1e-4
+"""[m] a pair whose lower bound is within this of deciding a step is measured: far above
+Coal's GJK tolerance (≈ 1 µm), so rounding in the measured distances cannot hide a pair."""
+
+
+def _advance_lazy(
+    scene: CollisionScene,
+    position: Callable[[float], NDArray[np.float64]],
+    end: float,
+    rates: NDArray[np.float64],
+    options: SweepOptions,
+) -> SweepResult:
+    """:func:`_advance` measuring only the pairs that decide each step.
+
+    At each s the eager check measures every pair's gap g_k = d_k − margin_k, stops at the
+    first argmin if its gap is ≤ the clearance, and otherwise steps by min_k g_k/M_k over the
+    moving pairs. Here every pair has a lower bound ℓ_k ≤ d_k
+    (:meth:`CollisionScene.lower_bounds`); a pair is measured when ℓ_k − margin_k − slack could
+    be ≤ the clearance, ≤ the smallest measured gap, or (moving) ≤ M_k times the smallest
+    measured ratio, until no unmeasured pair can be. Unmeasured pairs then have gaps strictly
+    above every value the eager check takes its minimum, argmin and step from, so both checks
+    take the same steps and stop at the same s with the same pair and distance.
+    """
+    bounds = scene.tight_pair_bounds @ rates  # M per pair [m per unit s]
+    margins = options.pair_margins(scene.pairs)
+    clearance = options.clearance
+    exact_below = clearance + margins
+    moving = bounds > 0
+    any_moving = bool(np.any(moving))
+    per_rate = np.where(moving, bounds, 1.0)
+    n = len(scene.pairs)
+    s, checks = 0.0, 0
+    while True:
+        q = position(s)
+        lower = scene.lower_bounds(q, exact_below) - margins - LAZY_SLACK  # on the gaps [m]
+        lower_ratio = np.where(moving, lower / per_rate, np.inf)  # on the steps [unit s]
+        d = np.full(n, np.inf)
+        fresh = np.zeros(n, dtype=bool)
+        checks += 1
+
+        def measure(
+            indices: Sequence[int],
+            d: NDArray[np.float64] = d,
+            fresh: NDArray[np.bool_] = fresh,
+        ) -> None:
+            for j in indices:
+                if not fresh[j]:
+                    d[j] = scene.measure(j, float(exact_below[j]))
+                    fresh[j] = True
+
+        measure(np.flatnonzero(lower <= clearance).tolist())
+        measure([int(np.argmin(lower))] + ([int(np.argmin(lower_ratio))] if any_moving else []))
+        while True:
+            gap = d - margins
+            g_min = float(np.min(gap))
+            r_min = float(np.min(gap[moving] / bounds[moving])) if any_moving else np.inf
+            wanted = ~fresh & ((lower <= g_min) | (lower_ratio <= r_min))
+            if not wanted.any():
+                break
+            measure(np.flatnonzero(wanted).tolist())
+        k = int(np.argmin(gap))
+        need = float(d[k] - gap[k]) + clearance
+        if gap[k] <= clearance:
+            return SweepResult(False, s, q, scene.pairs[k], float(d[k]), checks, need)
+        if s >= end:
+            return SweepResult(True, end, q, scene.pairs[k], float(d[k]), checks, need)
+        if checks >= options.max_checks:
+            return SweepResult(False, s, q, scene.pairs[k], float(d[k]), checks, need)
+        step = r_min if any_moving else end - s
         s = min(end, s + step)
 
 

@@ -1,0 +1,116 @@
+"""Monte Carlo trials on a Dask distributed cluster: the same trials, in the same order.
+
+:func:`iter_trials_on` is :func:`~synth.replay.trials.iter_trials` with a
+``distributed.Client`` in place of the process pool: chunks of trials are submitted as tasks,
+at most a few per worker ahead of the consumer, and their runs are yielded in trial order. Each
+worker process builds a program's :class:`~synth.replay.run.ReplayContext` once and keeps it
+(the same cache as a pool worker), and a trial's outcome depends only on (program, task, seed,
+index), so a cluster gives the report a local run with the same seed gives, for any number of
+workers. Closing the iterator (Ctrl-C, an early stop) cancels the tasks not yet consumed.
+
+**A real cluster.** Every worker must import this version of synth (install it, with its
+fixtures' meshes and arm files reachable at the same paths, or ship a wheel with
+``client.upload_file``), and should run one thread per process (``dask worker ADDRESS
+--nthreads 1 --nworkers N``): a worker's replay contexts are not thread-safe, so chunks in one
+process run one at a time. Then ``synth replay PROGRAM.al --task TASK.yaml --trials 1000000
+--dask tcp://scheduler:8786``, or in Python ``replay(..., client=Client("tcp://…"))``.
+``--dask local`` starts a ``LocalCluster`` of ``--workers`` processes on this machine.
+
+Dask is an optional dependency (the ``dask`` extra): nothing here imports it at module import.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections import deque
+from collections.abc import Generator, Iterator
+from contextlib import contextmanager
+from typing import Any
+
+from synth.exceptions import SynthError
+from synth.replay.report import RunReport
+from synth.replay.trials import TrialJob, run_chunk
+
+__all__ = ["dask_client", "iter_trials_on"]
+
+_CHUNK = 8
+"""Trials per task: a task round trip costs milliseconds, a trial about 0.1 s."""
+_AHEAD = 4
+"""Tasks in flight per worker thread."""
+_LOCK = threading.Lock()
+
+
+def _run_chunk_serial(job: TrialJob, seed: int, start: int, stop: int) -> list[RunReport]:
+    """:func:`~synth.replay.trials.run_chunk`, one at a time in a worker process."""
+    with _LOCK:
+        return run_chunk(job, seed, start, stop)
+
+
+def _threads(client: Any) -> int:
+    """Worker threads of the cluster the client is connected to (at least 1)."""
+    try:
+        return max(1, sum(client.nthreads().values()))
+    except Exception:  # a client that cannot say: one task at a time per worker we know of
+        return 1
+
+
+def iter_trials_on(
+    client: Any, job: TrialJob, seed: int, count: int
+) -> Generator[RunReport, None, None]:
+    """Trials 0 … count−1 of ``job`` run on ``client``'s cluster, yielded in trial order.
+
+    At most ``_AHEAD`` tasks of ``_CHUNK`` trials per worker thread are in flight, so memory
+    stays bounded whatever ``count`` is.
+    """
+    limit = _AHEAD * _threads(client)
+    starts: Iterator[int] = iter(range(0, count, _CHUNK))
+    in_flight: deque[Any] = deque()
+    try:
+        while True:
+            while len(in_flight) < limit:
+                a = next(starts, None)
+                if a is None:
+                    break
+                stop = min(a + _CHUNK, count)
+                in_flight.append(client.submit(_run_chunk_serial, job, seed, a, stop, pure=False))
+            if not in_flight:
+                return
+            yield from in_flight.popleft().result()
+    finally:
+        if in_flight:
+            client.cancel(list(in_flight))
+
+
+@contextmanager
+def dask_client(address: str, workers: int) -> Generator[Any, None, None]:
+    """A ``distributed.Client`` for ``--dask ADDRESS``, closed on exit.
+
+    ``"local"`` starts a ``LocalCluster`` of ``workers`` single-threaded processes (stopped on
+    exit); any other address connects to the scheduler there (within 5 s). Raises
+    :class:`SynthError` when Dask is not installed or the scheduler cannot be reached.
+    """
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        raise SynthError(
+            "--dask needs Dask: pip install 'synth[dask]' (dask[distributed])"
+        ) from None
+    if address == "local":
+        cluster = LocalCluster(
+            n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
+        )
+        client = Client(cluster)
+        try:
+            yield client
+        finally:
+            client.close()
+            cluster.close()
+        return
+    try:
+        client = Client(address, timeout=5)
+    except (OSError, TimeoutError) as exc:
+        raise SynthError(f"--dask {address}: cannot reach the scheduler ({exc})") from None
+    try:
+        yield client
+    finally:
+        client.close()

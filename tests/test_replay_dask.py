@@ -1,0 +1,50 @@
+"""Monte Carlo trials on a Dask cluster (issue 14): the report of a local run with the same seed.
+
+A ``LocalCluster`` of two single-threaded worker processes runs the trials of the seed's search
+listing; every trial's run (outcome, line, message, time to the last bit, statements) and the
+summary must equal a run in this process, since a trial depends only on (program, task, seed,
+index) (:mod:`synth.replay.run`). Dask is the ``dask`` extra, which ``make test`` installs.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from synth.cli import main
+from synth.replay import replay
+
+distributed = pytest.importorskip("distributed")
+
+ROOT = Path(__file__).parent.parent
+SEED_TASK = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
+SEARCH = ROOT / "tests" / "data" / "al" / "seed_4_8_search.al"
+
+
+@pytest.fixture(scope="module")
+def client() -> Iterator[Any]:
+    cluster = distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+    )
+    with distributed.Client(cluster) as c:
+        yield c
+    cluster.close()
+
+
+def test_a_cluster_gives_the_local_report(client: Any) -> None:
+    text = SEARCH.read_text(encoding="utf-8")
+    # 20 trials of seed 0 include trial 18, the listing's abort beside the box
+    on_cluster = replay(text, SEED_TASK, trials=20, seed=0, client=client)
+    local = replay(text, SEED_TASK, trials=20, seed=0, workers=1)
+    assert on_cluster.trials == local.trials
+    assert on_cluster.monte_carlo == local.monte_carlo
+    assert dict(local.monte_carlo.outcomes) == {"success": 19, "abort": 1}
+
+
+def test_an_unreachable_scheduler_is_a_usage_error(capsys: pytest.CaptureFixture[str]) -> None:
+    argv = ["replay", str(SEARCH), "--task", str(SEED_TASK), "--trials", "2"]
+    assert main([*argv, "--dask", "tcp://127.0.0.1:9"]) == 2
+    assert "--dask tcp://127.0.0.1:9: cannot reach the scheduler" in capsys.readouterr().err
