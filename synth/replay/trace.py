@@ -152,6 +152,8 @@ class TraceRecorder:
     samples: list[TraceSample] = field(default_factory=list)
     events: list[TraceEvent] = field(default_factory=list)
     _played: dict[int, float] = field(default_factory=dict)
+    _motions: list[Motion] = field(default_factory=list)
+    """Every motion seen, held so that ``id`` keys stay unique for the whole run."""
 
     def __post_init__(self) -> None:
         if self.dt <= 0:
@@ -163,6 +165,9 @@ class TraceRecorder:
         first = key not in self._played
         since = self._played.get(key, 0.0)
         if first:
+            # Keep the motion alive: a freed motion's id may be reused by the next one, which
+            # would then look already played and leave a gap in the samples.
+            self._motions.append(motion)
             self.events.append(TraceEvent(motion.start_time, "start", motion.line, motion.kind))
         instants = list(np.arange(since if first else since + self.dt, elapsed, self.dt))
         more = first or elapsed > since + 1e-12  # a stop right after a pause adds no instant
