@@ -8,6 +8,7 @@ cm, L2575–2576) and the arm's forward kinematics.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -105,3 +106,24 @@ def test_trace_json_and_cli(tmp_path: Path, program: str) -> None:
 def test_recorder_rejects_a_bad_period(nominal: Trace) -> None:
     with pytest.raises(ValueError, match="dt"):
         TraceRecorder(None, {}, dt=0.0)  # type: ignore[arg-type]
+
+
+def test_every_motion_is_sampled_though_freed_ids_come_back(nominal: Trace) -> None:
+    # The recorder keys motions by id(); CPython hands a freed object's id to the next one of
+    # the same size, and before the recorder kept its motions alive that next motion looked
+    # already played and left no samples (a full-suite run's trace ended 1.1 s early).
+    class Played:
+        def __init__(self, start: float) -> None:
+            self.start_time, self.line, self.kind = start, 1, "move"
+
+    template = nominal.samples[0]
+    recorder = TraceRecorder(None, {}, dt=0.02)  # type: ignore[arg-type]
+    recorder._sample = (  # type: ignore[method-assign]
+        lambda motion, elapsed: dataclasses.replace(template, t=motion.start_time + elapsed)
+    )
+    for k in range(200):
+        motion = Played(0.1 * k)
+        recorder.played(motion, 0.05, False)  # type: ignore[arg-type]
+        del motion
+    assert sum(1 for e in recorder.events if e.kind == "start") == 200
+    assert len(recorder.samples) == 800  # 0, 0.02, 0.04 and 0.05 s into each motion
