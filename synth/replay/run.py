@@ -333,8 +333,7 @@ def replay_one(
     """
     if index < 0:
         raise ValueError(f"the trial index must be ≥ 0, got {index}")
-    if isinstance(task, str | Path) and base_dir is None:
-        base_dir = Path(task).resolve().parent
+    # build_context resolves a task file's URDF paths against its directory itself
     context = build_context(
         program_text,
         task,
