@@ -163,6 +163,15 @@ def after_seat(
     rho = float(np.linalg.norm(seat_in_part)) * theta**2
     half = epsilon + rho
     coefficients = _cross_coefficients(seat_in_part)
+    # max |(ω × h)_i| over the rotation bounds, per translation axis i
+    reach = {
+        axis: sum(
+            abs(c) * max(-rotations[j].lo, rotations[j].hi)
+            for j, c in coefficients[axis].items()
+            if j in rotations
+        )
+        for axis in TRANSLATION_PARAMS
+    }
     fields: dict[str, Bound] = dict(rotations)
     constraints: list[LinearConstraint] = []
     # An axis is corrected only where the part is known worse than the reading: else the
@@ -173,8 +182,7 @@ def after_seat(
     )
     for axis in corrected:
         terms = {j: c for j, c in coefficients[axis].items() if j in rotations and c != 0.0}
-        reach = sum(abs(c) * max(-rotations[j].lo, rotations[j].hi) for j, c in terms.items())
-        fields[axis] = Bound(lo=-(half + reach), hi=half + reach)
+        fields[axis] = Bound(lo=-(half + reach[axis]), hi=half + reach[axis])
         if terms:
             constraints.append(
                 LinearConstraint.model_construct(
@@ -198,11 +206,7 @@ def after_seat(
     # (along the others, where the part's own error and turn put it): a solid of its own.
     pin_bounds: dict[str, Bound] = {}
     for axis in TRANSLATION_PARAMS:
-        rotation_reach = sum(
-            abs(c) * max(-rotations[j].lo, rotations[j].hi)
-            for j, c in coefficients[axis].items()
-            if j in rotations
-        )
+        rotation_reach = reach[axis]
         prior = max(-known[axis].lo, known[axis].hi) if axis in known else 0.0
         if axis in corrected:
             extent = half
