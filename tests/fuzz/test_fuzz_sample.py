@@ -10,6 +10,7 @@ from pathlib import Path
 import fuzzgen
 import fuzzrun
 import pytest
+import yaml
 
 from synth.al.parser import parse_program
 
@@ -70,6 +71,16 @@ def test_mutations_edit_one_node_of_a_copy() -> None:
     assert fuzzgen._replace(tree, ("x",), lambda n: fuzzgen._scale(n, 300))["x"] == "1e+300 cm"
     assert tree == {"frames": [{"name": "a"}, {"name": "b"}], "x": "1 cm"}  # unchanged
     assert ("frames", 1, "name") in fuzzgen._paths(tree)
+
+
+def test_deep_nests_reach_the_yaml_text_but_never_the_python_tree() -> None:
+    # Walking a tree 1 200 deep raised RecursionError at a stack-dependent depth, which made
+    # Hypothesis abort 10 000-case runs with FlakyStrategyDefinition: the nest is text only.
+    tree = fuzzgen._replace({"x": "1 cm"}, ("x",), lambda _n: fuzzgen._nest_marker(1200))
+    assert fuzzgen._paths(tree) == [(), ("x",)]
+    loaded = yaml.safe_load(fuzzgen._dump({"a": fuzzgen._nest_marker(3), "b": [2]}))
+    assert loaded == {"a": [[["1 cm"]]], "b": [2]}
+    assert fuzzgen._dump(tree).count("[") == 1200
 
 
 def test_the_unmutated_golden_programs_parse() -> None:
