@@ -29,6 +29,7 @@ from synth.strategies.grasp import (
     palm_clearance,
     transform_pin_approach,
 )
+from synth.strategies.hypotheses import Affixed, Holding
 from synth.strategies.records import Grasp
 from synth.strategies.relations import approach_relation
 
@@ -190,10 +191,10 @@ def test_pickup_records_departure_and_worlds(ctx, pickups) -> None:
         assert g.grasp_determination is None  # NILTRANS (L2630)
         # Each pickup plans in its own child of the base world, with its own grasp affixed.
         assert p.world.parent is ctx.base_world
-        assert p.world.value("affixed", "PIN1", "BMANIP") == g.grasp
-        assert p.world.value("holding", "BMANIP") == "PIN1"
-    assert not ctx.base_world.holds(("affixed", "_", "_", "_"))
-    assert ctx.base_world.value("holding", "BMANIP") == "nothing"
+        assert p.world.get(Affixed, "PIN1", "BMANIP").grasp == g.grasp
+        assert p.world.get(Holding, "BMANIP").what == "PIN1"
+    assert not ctx.base_world.facts(Affixed)
+    assert ctx.base_world.get(Holding, "BMANIP").what == "nothing"
     # Relations read the grasp from their world: same nominal pin at the approach point, but
     # the hand errors act through each world's own grasp.
     a, b = found[0], found[-1]
@@ -204,8 +205,8 @@ def test_pickup_records_departure_and_worlds(ctx, pickups) -> None:
     lin_b = RelationModel.of(chain_b).displacement.linear
     assert not np.allclose(lin_a, lin_b)
     diff = a.world.diff(b.world)  # what a assumes beyond b
-    assert ("affixed", "PIN1", "BMANIP", a.strategy.grasp) in diff.added
-    assert ("affixed", "PIN1", "BMANIP", b.strategy.grasp) in diff.removed
+    assert Affixed("PIN1", "BMANIP", a.strategy.grasp) in diff.added
+    assert Affixed("PIN1", "BMANIP", b.strategy.grasp) in diff.removed
 
 
 def test_phi_is_the_fastest_and_dtry_standoff_follow_l2188(ctx, pickups) -> None:

@@ -17,6 +17,7 @@ from synth.models.loader import load_task
 from synth.strategies import PlanOptions
 from synth.strategies.context import build_context
 from synth.strategies.footprint import estimate_footprint
+from synth.strategies.hypotheses import Affixed, GraspDetermination
 from synth.strategies.records import Grasp
 from synth.strategies.relations import approach_relation, tap_relations
 from synth.strategies.search import (
@@ -43,10 +44,8 @@ DEG = math.pi / 180
 
 def world_with(ctx, omega: float, gamma: float):
     grasp = Grasp(omega * DEG, gamma * DEG, 3.5425 * CM)
-    return (
-        ctx.base_world.child(f"ω={omega} γ={gamma}")
-        .set_value("affixed", "PIN1", "BMANIP", grasp)
-        .set_value("grasp-determination", "PIN1", "exact")
+    return ctx.base_world.child(f"ω={omega} γ={gamma}").with_facts(
+        Affixed("PIN1", "BMANIP", grasp), GraspDetermination("PIN1")
     )
 
 

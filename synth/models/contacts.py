@@ -20,24 +20,14 @@ In YAML a contact is a mapping ``{a: box1.bottom, b: fixture1.floor, kind: insid
 seed's tuple without its predicate, ``[box1.bottom, fixture1.floor, inside_of]``. Checks that
 need the frame tree (unknown frames or features, unsupported pairs) live in
 :func:`synth.models.features.check_contacts`, called by the loader.
-
-In the world base a contact is the fact ``("contacts", a, b, kind)``
-(:func:`contact_facts`); :func:`contacts_in` reads them back, so the planner can locate objects
-from the contacts asserted in a hypothetical world as well as from the task.
 """
 
 from __future__ import annotations
 
 import re
-from collections.abc import Iterable
 from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, field_validator, model_validator
-
-from synth.models.world import Fact, World
-
-CONTACT_PREDICATE = "contacts"
-"""Predicate of contact facts in the world base (the seed's ``contacts``, L2946)."""
 
 ContactKind = Literal["inside_of", "extent_irrelevant"]
 CONTACT_KINDS: tuple[str, ...] = ("inside_of", "extent_irrelevant")
@@ -73,38 +63,9 @@ class ContactSpec(BaseModel):
             )
         return v
 
-    @property
-    def fact(self) -> Fact:
-        """The world-base fact ``("contacts", a, b, kind)``."""
-        return (CONTACT_PREDICATE, self.a, self.b, self.kind)
-
-
-def contact_facts(contacts: Iterable[ContactSpec]) -> tuple[Fact, ...]:
-    """World-base facts ``("contacts", a, b, kind)`` for ``contacts``, in order."""
-    return tuple(c.fact for c in contacts)
-
-
-def assert_contacts(world: World, contacts: Iterable[ContactSpec]) -> World:
-    """A new world holding ``world``'s facts and the contact facts of ``contacts``."""
-    return world.assert_all(contact_facts(contacts))
-
-
-def contacts_in(world: World) -> tuple[ContactSpec, ...]:
-    """The contacts asserted in ``world``, sorted by (a, b, kind) for deterministic output."""
-    found = [
-        ContactSpec(a=str(m["?a"]), b=str(m["?b"]), kind=m["?kind"])  # type: ignore[arg-type]
-        for m in world.query((CONTACT_PREDICATE, "?a", "?b", "?kind"))
-        if m["?kind"] in CONTACT_KINDS
-    ]
-    return tuple(sorted(found, key=lambda c: (c.a, c.b, c.kind)))
-
 
 __all__ = [
     "CONTACT_KINDS",
-    "CONTACT_PREDICATE",
     "ContactKind",
     "ContactSpec",
-    "assert_contacts",
-    "contact_facts",
-    "contacts_in",
 ]

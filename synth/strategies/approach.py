@@ -40,6 +40,7 @@ from synth.models.world import World
 from synth.strategies.bow import BOW_FRACTION, AxisPath, plan_axis_path
 from synth.strategies.context import Configuration, PlanContext, hand_at, transform_end_hand
 from synth.strategies.grasp import Pickup
+from synth.strategies.hypotheses import ApproachPhi, ApproachStandoff
 from synth.strategies.records import Destination, PinInHoleStrategy, Rejection
 from synth.strategies.relations import approach_relation, hole_frame_offset
 
@@ -112,7 +113,7 @@ def approach_heights(ctx: PlanContext, pickup: Pickup) -> tuple[float, float, fl
     error's lever by centimetres and Δz by θ_hand·Δl, far below the clearance.
     """
     opts = ctx.options
-    world = pickup.world.set_value("approach-standoff", ctx.pin_al, ctx.hole_al, opts.standoff)
+    world = pickup.world.with_facts(ApproachStandoff(ctx.pin_al, ctx.hole_al, opts.standoff))
     model = RelationModel.of(approach_relation(ctx, world, 0.0))
     ctx.counters.count_bounds(model.space)
     _, certified = model.displacement_along(np.array([0.0, 0.0, 1.0]))
@@ -225,8 +226,10 @@ def plan_approach(ctx: PlanContext, pickup: Pickup) -> Candidate | Rejection:
         ),
         bow=axis.bow,
     )
-    world = pickup.world.set_value("approach-phi", ctx.pin_al, ctx.hole_al, round(phi, 12))
-    world = world.set_value("approach-standoff", ctx.pin_al, ctx.hole_al, standoff)
+    world = pickup.world.with_facts(
+        ApproachPhi(ctx.pin_al, ctx.hole_al, round(phi, 12)),
+        ApproachStandoff(ctx.pin_al, ctx.hole_al, standoff),
+    )
     return Candidate(
         strategy, pickup, q_app, q_dest, q_surface, transport, try_time, tuple(table), world, axis
     )

@@ -35,6 +35,7 @@ from synth.models.park import nominal_environment, park_configuration
 from synth.models.spec import HandSpec, HoleShape, PinShape, TaskSpec, Uncertainty
 from synth.models.world import Fact, World
 from synth.strategies.clearance import GrossMotionCheck
+from synth.strategies.hypotheses import At, HandError, Holding, InHole, Task, Uncertain
 from synth.strategies.options import PlanOptions
 from synth.strategies.records import Grasp
 
@@ -250,15 +251,15 @@ def build_context(
     end: PinEnd = "tip" if insertion.direction == "parallel" else "head"
     pin_al = graph.al_names[insertion.pin]
     facts: list[Fact] = [
-        ("task", spec.name),
-        ("in-hole", pin_al, graph.al_names[insertion.start_hole], round(d_i, 9)),
-        ("at", pin_al, graph.al_names[insertion.start_hole]),
-        ("holding", manip.al_name, "nothing"),
-        ("hand-error", manip.al_name, "manipulator.hand_error" if manip.hand_error else "exact"),
+        Task(spec.name),
+        InHole(pin_al, graph.al_names[insertion.start_hole], round(d_i, 9)),
+        At(pin_al, graph.al_names[insertion.start_hole]),
+        Holding(manip.al_name, "nothing"),
+        HandError(manip.al_name, "manipulator.hand_error" if manip.hand_error else "exact"),
     ]
     for name, link in graph.links.items():
         if link.uncertainty is not None and link.uncertainty.bounds():
-            facts.append(("uncertain", graph.al_names[name], f"frames.{name}.uncertainty"))
+            facts.append(Uncertain(graph.al_names[name], f"frames.{name}.uncertainty"))
     return PlanContext(
         spec=spec,
         graph=graph,

@@ -44,10 +44,10 @@ from synth.models.arm import grasp_rating
 from synth.models.spec import HandSpec, PinShape
 from synth.models.world import World
 from synth.strategies.context import Configuration, PinEnd, PlanContext, hand_at
+from synth.strategies.hypotheses import Affixed, At, GraspDetermination, Holding
 from synth.strategies.options import PlanOptions
 from synth.strategies.records import Destination, Grasp, GraspStrategy, Rejection, grasp_remarks
 
-EXACT = "exact"
 """World atom for a grasp determination of NILTRANS: ``center`` holds the pin exactly (L2630)."""
 
 PAD_TILT = math.radians(10.0)
@@ -161,7 +161,7 @@ def grasp_relation(ctx: PlanContext, grasp: Grasp, *, hand_error: bool = True) -
     uncertainty blocks (the same ``link:<frame>`` blocks the insertion's relations use). Without
     ``hand_error`` the relation is the start location's share only.
     """
-    from synth.strategies.relations import SpaceBuilder, frame_inverse_terms  # imports EXACT
+    from synth.strategies.relations import SpaceBuilder, frame_inverse_terms  # imports grasp
 
     builder = SpaceBuilder()
     to_pin = _inverse_terms(frame_inverse_terms(ctx.graph, ctx.pin_frame, builder))
@@ -593,11 +593,10 @@ def _pickup(
         remarks=grasp_remarks(grasp),
         centering=centering,
     )
-    world = (
-        ctx.base_world.child(grasp_label(grasp))
-        .set_value("holding", hand_al, pin_al)
-        .set_value("affixed", pin_al, hand_al, grasp)
-        .set_value("grasp-determination", pin_al, centering.residual or EXACT)
-        .set_value("at", pin_al, "departure")
+    world = ctx.base_world.child(grasp_label(grasp)).with_facts(
+        Holding(hand_al, pin_al),
+        Affixed(pin_al, hand_al, grasp),
+        GraspDetermination(pin_al, centering.residual),
+        At(pin_al, "departure"),
     )
     return Pickup(strategy, q_approach, q_grasp, q_departure, move_time, lift_time, world)

@@ -38,6 +38,7 @@ from synth.strategies.approach import Candidate
 from synth.strategies.context import PlanContext
 from synth.strategies.fine import fine_motion_obstruction
 from synth.strategies.footprint import estimate_footprint, footprint_tables
+from synth.strategies.hypotheses import Accuracy, Tapped
 from synth.strategies.records import PinInHoleStrategy, Rejection
 from synth.strategies.relations import approach_relation, hole_only_relation
 from synth.strategies.search import plan_search, points_within_box, search_size_problem
@@ -130,8 +131,8 @@ def refine(ctx: PlanContext, cand: Candidate) -> Refined | Rejection:
             "guarded move could arrive without a force (seed L2186)",
         )
     z_limit = axial_limit(opts.tau, ins.d_f, ins.d_s)
-    world = cand.world.set_value(
-        "accuracy", ctx.pin_al, ctx.hole_al, (fp.dx, fp.dy, fp.dz, fp.zeta, fp.dtheta)
+    world = cand.world.with_facts(
+        Accuracy(ctx.pin_al, ctx.hole_al, fp.dx, fp.dy, fp.dz, fp.zeta, fp.dtheta)
     )
     tap = None
     dz = fp.dz
@@ -153,7 +154,7 @@ def refine(ctx: PlanContext, cand: Candidate) -> Refined | Rejection:
             f"{tap.surface}, {_cm(tap.clearance)} clear of holes and edges; Δz after the tap "
             f"{_cm(dz)} (LP), extra time {tap.time:.2f} s"
         )
-        world = world.set_value("tapped", tap.surface, tap.offset)
+        world = world.with_facts(Tapped(tap.surface, tap.offset))
     else:
         decisions.append(
             f"no tap: Δz = {_cm(fp.dz)} ≤ τ·(d_f − d_s)/(1 + τ) = {_cm(z_limit)}, small enough to "

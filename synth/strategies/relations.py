@@ -29,10 +29,9 @@ from synth.errors.chain import ErrorChain, Fixed, Perturbation, Term
 from synth.errors.parameters import ParameterBlock, ParameterSpace
 from synth.models.graph import AttributeGraph
 from synth.models.spec import WORLD, Uncertainty
-from synth.models.world import MatchError, World
+from synth.models.world import World
 from synth.strategies.context import PlanContext
-from synth.strategies.grasp import EXACT
-from synth.strategies.records import Grasp
+from synth.strategies.hypotheses import Affixed, ApproachStandoff, GraspDetermination
 
 MEASUREMENT = "tap.measurement"
 """Owner of the tap's measurement variable m [m] (a one-parameter ``z`` block)."""
@@ -105,12 +104,11 @@ def held_end_terms(
 ) -> list[Term]:
     """Terms of the true pin end: ``hand₀ ∘ E_hand ∘ T_hand_pin ∘ [E_grasp] ∘ T_pin_end``.
 
-    The grasp comes from the world's ``("affixed", pin, hand, grasp)`` fact and the grasp
-    determination from ``("grasp-determination", pin, d)``: ``exact`` or a tuple of
-    ``(param, lo, hi)`` bounds of the pin's error in the hand.
+    The grasp comes from the world's :class:`Affixed` fact and the grasp determination from
+    its :class:`GraspDetermination`: no block when exact, else ``(param, lo, hi)`` bounds of
+    the pin's error in the hand.
     """
-    grasp = world.value("affixed", ctx.pin_al, ctx.hand_al)
-    assert isinstance(grasp, Grasp), f"the world affixes {grasp!r}, not a grasp"
+    grasp = world.get(Affixed, ctx.pin_al, ctx.hand_al).grasp
     terms: list[Term] = [Fixed(transform_world_hand)]
     if ctx.hand_error is not None and ctx.hand_error.bounds():
         unc = ctx.hand_error
@@ -118,10 +116,8 @@ def held_end_terms(
         index = builder.block(hand_key, lambda: ParameterBlock.from_uncertainty(owner, unc))
         terms.append(Perturbation(index))
     terms.append(Fixed(grasp.pin_from_hand().inverse()))
-    determination = world.value("grasp-determination", ctx.pin_al)
-    if determination != EXACT:
-        assert isinstance(determination, tuple)
-        bounds = determination
+    bounds = world.get(GraspDetermination, ctx.pin_al).residual
+    if bounds:
         index = builder.block("grasp", lambda: box_block(f"{ctx.pin_al}@grasp", bounds))
         terms.append(Perturbation(index))
     terms.append(Fixed(ctx.transform_pin_end))
@@ -130,23 +126,18 @@ def held_end_terms(
 
 def hand_for_end(ctx: PlanContext, world: World, transform_world_end: pin.SE3) -> pin.SE3:
     """Nominal world pose of the hand holding the pin end at ``transform_world_end``."""
-    grasp = world.value("affixed", ctx.pin_al, ctx.hand_al)
-    assert isinstance(grasp, Grasp)
+    grasp = world.get(Affixed, ctx.pin_al, ctx.hand_al).grasp
     return transform_world_end * ctx.transform_pin_end.inverse() * grasp.pin_from_hand()
 
 
 def approach_standoff(ctx: PlanContext, world: World) -> float:
     """The approach height [m] of ``world``'s candidate.
 
-    Its ``("approach-standoff", pin, hole)`` fact (:mod:`synth.strategies.approach` derives it
+    Its :class:`ApproachStandoff` fact (:mod:`synth.strategies.approach` derives it
     from Δz), else the option's.
     """
-    try:
-        value = world.value("approach-standoff", ctx.pin_al, ctx.hole_al)
-    except MatchError:
-        return ctx.options.standoff
-    assert isinstance(value, int | float)
-    return float(value)
+    fact = world.find(ApproachStandoff, ctx.pin_al, ctx.hole_al)
+    return ctx.options.standoff if fact is None else fact.standoff
 
 
 def approach_relation(ctx: PlanContext, world: World, phi: float) -> ErrorChain:

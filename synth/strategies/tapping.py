@@ -45,6 +45,7 @@ from synth.models.spec import HoleShape, SurfaceShape
 from synth.strategies.approach import Candidate, hand_at, hole_frame_offset, pin_destination
 from synth.strategies.context import PlanContext
 from synth.strategies.footprint import certified_tilt
+from synth.strategies.hypotheses import TapAt
 from synth.strategies.records import ErrorFootprint, Rejection, Tap
 from synth.strategies.relations import TapRelations, hole_only_relation, tap_relations
 
@@ -225,7 +226,7 @@ def plan_tap(ctx: PlanContext, cand: Candidate, footprint: ErrorFootprint) -> Ta
     in_hole = transform_surface_hole.inverse().act(np.array([place.x, place.y, 0.0]))
     offset = (float(in_hole[0]), float(in_hole[1]), 0.0)
     phi = cand.strategy.phi
-    world = cand.world.set_value("tap-at", ctx.pin_al, ctx.graph.al_names[surface], offset)
+    world = cand.world.with_facts(TapAt(ctx.pin_al, ctx.graph.al_names[surface], offset))
     bound = measurement_bound(ctx, tap_relations(ctx, world, phi, offset, 0.0))
     if bound >= opts.tap_travel:
         return Rejection(
