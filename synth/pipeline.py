@@ -4,8 +4,8 @@
 benchmarks and the end-to-end tests call; none of them composes the stages itself.
 
 1. The believed graph (:func:`~synth.errors.locate.believed_graph`): contact-located objects
-   where their contacts put them — the world the planner plans in, the emitter declares and
-   the replay samples true worlds around.
+   where their contacts put them — the world the planner plans in and the emitter declares
+   (the replay draws their true poses from the contacts themselves).
 2. Best-first planning (:func:`~synth.strategies.planner.plan_task`, seed §4.2–4.6).
 3. The chosen strategy's AL program (:func:`~synth.codegen.emitter.emit_program`).
 4. Its proof (:func:`~synth.replay.proof.prove`): the nominal replay and a sequential Monte

@@ -643,8 +643,8 @@ def believed_graph(spec: TaskSpec) -> AttributeGraph:
     """The task as a program believes it: every object located by contacts at its derived pose.
 
     What the planner plans in, the emitter declares (``--preamble``) and the replay binds the
-    program's names to and samples true worlds around: all three must read located objects the
-    same way (a fixture-held box has no typed pose, only contacts).
+    program's names to: all three must read located objects the same way (a fixture-held box
+    has no typed pose, only contacts). The replay draws their true poses from the contacts.
     """
     return AttributeGraph(resolve_contacts(spec) if spec.contacts else spec)
 

@@ -6,7 +6,9 @@ binds the task's world to AL names (:mod:`synth.al.binding`), and runs it on a
 
 * once in the *nominal* world, where the truth equals the program's beliefs (every object at its
   nominal pose, no hand positioning error);
-* ``trials`` times in worlds sampled from the task's uncertainty (:mod:`synth.replay.truth`).
+* ``trials`` times in worlds sampled from the task's uncertainty (:mod:`synth.replay.truth`);
+  an object located by contacts is drawn from its contacts (:mod:`synth.replay.located`), not
+  from the pose and block the planner derived for it.
 
 **Seeds.** Trial i draws from ``np.random.SeedSequence(seed, spawn_key=(i,))`` — the i-th child
 of ``SeedSequence(seed).spawn(trials)`` — split again into one stream for the world and one for
@@ -130,11 +132,10 @@ def build_context(
         raise SpecError("manipulator", "the replay needs the task's manipulator (arm and park)")
     arm = manipulator_arm(manipulator, base_dir)
     park = pose_to_se3(manipulator.park.pose)
-    believed = believed_graph(spec)  # a fixture-held box: where its contacts put it
+    graph = replay_graph(spec, distribution)
     q_park = park_configuration(
-        arm, park, nominal_environment(believed, arm), manipulator.park.al_name
+        arm, park, nominal_environment(graph, arm), manipulator.park.al_name
     )
-    graph = replay_graph(spec, distribution, believed)
     return ReplayContext(
         program=program,
         spec=graph.spec,
@@ -148,19 +149,23 @@ def build_context(
     )
 
 
-def replay_graph(
-    spec: TaskSpec,
-    distribution: Distribution | None = None,
-    believed: AttributeGraph | None = None,
-) -> AttributeGraph:
-    """The graph trials sample from: the believed one, every block's distribution replaced.
+def replay_graph(spec: TaskSpec, distribution: Distribution | None = None) -> AttributeGraph:
+    """The graph a replay runs in: the program's beliefs, and the task's contacts.
 
-    ``believed`` is :func:`~synth.errors.locate.believed_graph` of ``spec`` when already built.
+    Its frames are those of :func:`~synth.errors.locate.believed_graph` — an object located by
+    contacts at the pose the planner derived, with the derived block: what the program was
+    planned with and what its names are bound to — every block's distribution replaced by
+    ``distribution``. It keeps the task's ``contacts``, from which
+    :func:`~synth.replay.truth.sample_world` draws the true pose of every located object; its
+    derived block only measures each trial's error against the belief. Building it again from
+    its own spec gives the same graph (the contacts are located again).
     """
-    graph = believed if believed is not None else believed_graph(spec)
+    believed = believed_graph(spec).spec
     if distribution is not None:
-        graph = AttributeGraph(graph.spec.with_distribution(distribution))
-    return graph
+        believed = believed.with_distribution(distribution)
+    if spec.contacts:
+        believed = believed.model_copy(update={"contacts": spec.contacts})
+    return AttributeGraph(believed)
 
 
 def machine_for(context: ReplayContext, world: TrueWorld, hand_errors: HandErrors) -> ReplayMachine:

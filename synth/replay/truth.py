@@ -14,6 +14,14 @@ distribution (uniform on the feasible set, or normal with σ = tolerance/3 trunc
 bounds, seed L7242), all blocks of the task in one draw. True world poses are composed down the
 frame tree from the true links.
 
+**Objects located by contacts** (the task's ``contacts:``, seed A.1) are not perturbed around
+a nominal: their true pose in their parent's frame is drawn from the contacts themselves, after
+the blocks, uniformly on the set of poses the contacts allow (:mod:`synth.replay.located`),
+whatever the distribution. The graph may carry the program's belief about such an object too
+(:func:`synth.replay.run.replay_graph` gives it the pose and block the planner derived): the
+belief is then only the reference its error is reported against, E = N⁻¹ ∘ T, never where the
+truth is drawn.
+
 **Hand positioning error** (the task's ``manipulator.hand_error``, seed A.2 L3195: ±0.05 in,
 ±0.25°). The arm reaches each commanded hand target only up to an error E drawn afresh for
 every target of every motion (destination and each via point), applied on the right, in the
@@ -31,6 +39,7 @@ true world equals the program's beliefs.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
@@ -40,10 +49,12 @@ import pinocchio as pin
 from synth.errors.parameters import ParameterBlock, ParameterSpace
 from synth.models.graph import AttributeGraph
 from synth.models.spec import WORLD, Uncertainty
+from synth.replay.located import located_objects
 
 __all__ = [
     "HandErrors",
     "TrueWorld",
+    "error_parameters",
     "link_error",
     "nominal_world",
     "sample_world",
@@ -73,20 +84,39 @@ def link_error(names: tuple[str, ...], values: np.ndarray) -> pin.SE3:
     return pin.SE3(rotation, translation)
 
 
+def error_parameters(error: pin.SE3) -> dict[str, float]:
+    """The inverse of :func:`link_error`: (x, y, z, rx, ry, rz) [m, rad] of ``error``.
+
+    With R = rot(x̂, rx)·rot(ŷ, ry)·rot(ẑ, rz): ``ry = asin R₀₂``, ``rx = atan2(−R₁₂, R₂₂)``,
+    ``rz = atan2(−R₀₁, R₀₀)`` (|ry| < 90°).
+    """
+    r, t = error.rotation, error.translation
+    return {
+        "x": float(t[0]),
+        "y": float(t[1]),
+        "z": float(t[2]),
+        "rx": math.atan2(-r[1, 2], r[2, 2]),
+        "ry": math.asin(min(max(float(r[0, 2]), -1.0), 1.0)),
+        "rz": math.atan2(-r[0, 1], r[0, 0]),
+    }
+
+
 @dataclass(frozen=True, eq=False)
 class TrueWorld:
     """The true poses of one trial.
 
     ``world_from`` maps every task frame name to its true world pose [m]; ``link_errors`` maps
-    each perturbed frame to its error E(v) (parent side, see the module docstring);
-    ``nominal`` is True for the believed world (every error zero).
+    each perturbed frame to its error E (parent side, see the module docstring; for a located
+    object the error of its drawn pose against the graph's belief); ``nominal`` is True for the
+    believed world (every error zero).
     """
 
     world_from: Mapping[str, pin.SE3]
     link_errors: Mapping[str, pin.SE3]
     nominal: bool
     parameters: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
-    """The sampled error parameters per perturbed frame [m, rad]: ``{frame: {"x": …}}``."""
+    """The sampled error parameters per perturbed frame [m, rad]: ``{frame: {"x": …}}`` (a
+    located object's are :func:`error_parameters` of its error, all six)."""
 
     def pose(self, frame: str) -> pin.SE3:
         """True world pose of ``frame`` [m] (a copy)."""
@@ -112,30 +142,38 @@ def nominal_world(graph: AttributeGraph) -> TrueWorld:
     return TrueWorld(_compose(graph, {}), {}, nominal=True)
 
 
-def _uncertain_links(graph: AttributeGraph) -> list[tuple[str, Uncertainty]]:
+def _uncertain_links(
+    graph: AttributeGraph, located: Mapping[str, object]
+) -> list[tuple[str, Uncertainty]]:
     return [
         (name, link.uncertainty)
         for name, link in graph.links.items()
-        if link.uncertainty is not None and link.uncertainty.bounds()
+        if link.uncertainty is not None and link.uncertainty.bounds() and name not in located
     ]
 
 
 def sample_world(graph: AttributeGraph, rng: np.random.Generator) -> TrueWorld:
-    """One true world: every uncertain link perturbed by a sample of its block (see above)."""
-    links = _uncertain_links(graph)
-    if not links:
-        return TrueWorld(_compose(graph, {}), {}, nominal=False)
-    blocks = tuple(ParameterBlock.from_uncertainty(name, unc) for name, unc in links)
-    space = ParameterSpace(blocks)
-    v = space.sample(rng, 1)[0]
-    errors = {
-        b.owner: link_error(b.names, v[space.block_slice(b.owner)])
-        for b in blocks  # owners are distinct frame names
-    }
-    parameters = {
-        b.owner: dict(zip(b.names, map(float, v[space.block_slice(b.owner)]), strict=True))
-        for b in blocks
-    }
+    """One true world (see the module docstring).
+
+    The uncertain links perturbed by a draw of their blocks, then the located objects drawn
+    from their contacts, from ``rng`` in that order.
+    """
+    located = located_objects(graph)
+    links = _uncertain_links(graph, located)
+    errors: dict[str, pin.SE3] = {}
+    parameters: dict[str, dict[str, float]] = {}
+    if links:
+        blocks = tuple(ParameterBlock.from_uncertainty(name, unc) for name, unc in links)
+        space = ParameterSpace(blocks)
+        v = space.sample(rng, 1)[0]
+        for b in blocks:  # owners are distinct frame names
+            values = v[space.block_slice(b.owner)]
+            errors[b.owner] = link_error(b.names, values)
+            parameters[b.owner] = dict(zip(b.names, map(float, values), strict=True))
+    for name, placement in located.items():
+        error = graph.links[name].parent_from_child.actInv(placement.sample(rng))
+        errors[name] = error
+        parameters[name] = error_parameters(error)
     return TrueWorld(_compose(graph, errors), errors, nominal=False, parameters=parameters)
 
 
