@@ -40,10 +40,11 @@ from synth.models.spec import HoleShape, InsertionSpec, PinShape
 class InsertionParameters:
     """d_f, d_s, Δr_ok [m], Δθ_ok [rad], the direction, and where each value came from.
 
-    ``lead`` [m] is the parts' geometric lead (the derived Δr_ok): what the replay's contact
-    geometry captures, whatever Δr_ok the task gives. ``friction`` [1] is μ and
-    ``wedge_tilt`` [rad] Whitney's θ_wedge = c/μ, the bound on ``dtheta_ok``; ``notes`` are
-    remarks for the plan (a given value clipped).
+    ``lead`` [m] is the parts' geometric lead (the derived Δr_ok), whatever Δr_ok the task
+    gives: for an upright pin it is what the replay captures, which the replay decides from the
+    parts themselves (:mod:`synth.replay.capture`), never from these formulas. ``friction``
+    [1] is μ and ``wedge_tilt`` [rad] Whitney's θ_wedge = c/μ, the bound on ``dtheta_ok``;
+    ``notes`` are remarks for the plan (a given value clipped).
     """
 
     pin: str
