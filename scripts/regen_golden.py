@@ -75,7 +75,7 @@ def recorded_source() -> str:
 
 def golden_strategy(task: str, source: str = "auto") -> tuple[Any, Any]:
     """The strategy record and attribute graph the golden program of ``task`` comes from."""
-    from synth.errors.locate import believed_graph
+    from synth.models.believed import believed_graph
     from synth.models.loader import load_task
 
     path = TASKS_DIR / f"{task}.yaml"

@@ -18,7 +18,6 @@ import pytest
 
 from synth.al import ast
 from synth.al import values as V
-from synth.al.binding import bind_world, preamble
 from synth.al.interpreter import Interpreter, RunResult
 from synth.al.machine import (
     DurationConstraint,
@@ -31,6 +30,7 @@ from synth.al.machine import (
     OpeningMonitor,
 )
 from synth.al.parser import parse_program
+from synth.codegen.binding import bind_world, preamble
 from synth.exceptions import ALRuntimeError, SynthError
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task

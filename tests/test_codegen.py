@@ -25,12 +25,12 @@ import pytest
 
 from synth.al import ast
 from synth.al import values as V
-from synth.al.binding import bind_world
 from synth.al.interpreter import HAND_NAMES, Interpreter
 from synth.al.machine import IdealMachine, MachineCommand
 from synth.al.names import UNITS
 from synth.al.parser import parse_program
 from synth.al.printer import format_program
+from synth.codegen.binding import bind_world
 from synth.codegen.emitter import ALEmitter, emit_program, emitter_for, languages
 from synth.exceptions import CodegenError
 from synth.models.graph import AttributeGraph

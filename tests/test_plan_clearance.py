@@ -22,7 +22,7 @@ import pytest
 from _tasks import plannable, synthesized, with_base
 
 from synth.codegen.emitter import emit_program
-from synth.errors.locate import believed_graph
+from synth.models.believed import believed_graph
 from synth.models.loader import load_task
 from synth.models.spec import TaskSpec
 from synth.replay import replay

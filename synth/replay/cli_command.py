@@ -334,8 +334,8 @@ def run_replay(args: argparse.Namespace) -> int:
     from synth.models.loader import load_task
 
     if args.preamble:
-        from synth.al.binding import preamble
-        from synth.errors.locate import believed_graph
+        from synth.codegen.binding import preamble
+        from synth.models.believed import believed_graph
 
         print(preamble(believed_graph(load_task(args.task))), end="")
         return 0

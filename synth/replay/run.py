@@ -1,7 +1,7 @@
 """Replay an AL program on a task: a nominal run and Monte Carlo trials in sampled true worlds.
 
 :func:`replay` parses the program (syntax errors raise :class:`~synth.exceptions.ALSyntaxError`),
-binds the task's world to AL names (:mod:`synth.al.binding`), and runs it on a
+binds the task's world to AL names (:mod:`synth.codegen.binding`), and runs it on a
 :class:`~synth.replay.machine.ReplayMachine`:
 
 * once in the *nominal* world, where the truth equals the program's beliefs (every object at its
@@ -37,13 +37,13 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from synth.al import ast
-from synth.al.binding import WorldBinding, bind_world
 from synth.al.interpreter import Interpreter
 from synth.al.parser import parse_program
-from synth.errors.locate import believed_graph
+from synth.codegen.binding import WorldBinding, bind_world
 from synth.exceptions import ALRuntimeError, SpecError
 from synth.models.arm import Arm, manipulator_arm
 from synth.models.arm.collision import SceneCache
+from synth.models.believed import believed_graph
 from synth.models.graph import AttributeGraph, pose_to_se3
 from synth.models.loader import load_task
 from synth.models.park import nominal_environment, park_configuration
@@ -155,7 +155,7 @@ def replay_graph(
 ) -> AttributeGraph:
     """The graph trials sample from: the believed one, every block's distribution replaced.
 
-    ``believed`` is :func:`~synth.errors.locate.believed_graph` of ``spec`` when already built.
+    ``believed`` is :func:`~synth.models.believed.believed_graph` of ``spec`` when already built.
     """
     graph = believed if believed is not None else believed_graph(spec)
     if distribution is not None:
