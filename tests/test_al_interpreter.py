@@ -34,11 +34,10 @@ from synth.codegen.binding import bind_world, preamble
 from synth.exceptions import ALRuntimeError, SynthError
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
+from synth.units import CM, INCH
 
 ROOT = Path(__file__).parent.parent
 DATA = Path(__file__).parent / "data" / "al"
-CM = 0.01
-INCH = 0.0254
 OZ_N = 4.4482216152605 / 16  # 1 oz-force = 1/16 lbf [N]
 
 

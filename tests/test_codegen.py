@@ -36,13 +36,13 @@ from synth.exceptions import CodegenError
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
 from synth.strategies.records import Destination, PinInHoleStrategy
+from synth.units import CM
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data"
 GOLDEN = ROOT / "fixtures" / "golden"
 TASKS = ("seed_4_8", "seed_4_8_tap")
 SEED_LISTING = {"seed_4_8": "seed_4_8_search.al", "seed_4_8_tap": "seed_4_8_tap.al"}
-CM = 0.01
 
 
 def _load(name: str, path: Path) -> ModuleType:

@@ -17,8 +17,8 @@ from synth.models.contacts import ContactSpec
 from synth.models.features import box_features, fixture_features, object_vertices
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task, parse_task
+from synth.units import CM
 
-CM = 0.01
 FIXTURE = "fixtures/tasks/box_in_fixture.yaml"
 
 BASE = textwrap.dedent(

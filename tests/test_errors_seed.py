@@ -16,10 +16,9 @@ from synth.errors.chain import ErrorChain, Fixed, chain_between
 from synth.errors.estimate import RelationModel, estimate_errors
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
+from synth.units import CM
 
 FIXTURES = "fixtures/tasks"
-CM = 0.01
-IN = 0.0254
 
 
 @pytest.fixture(scope="module")

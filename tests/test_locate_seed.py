@@ -73,9 +73,9 @@ from synth.exceptions import EstimationError
 from synth.models.features import contact_groups
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
+from synth.units import CM
 
 FIXTURE = "fixtures/tasks/box_in_fixture.yaml"
-CM = 0.01
 A, B = 4.45 * CM, 3.80 * CM  # half-sizes of the box [m]
 XW, YW = 4.0 * CM, 5.0 * CM  # walls at x = ±XW, y = ±YW [m]
 DELTA = math.asin(XW / math.hypot(A, B)) - math.atan2(B, A)  # rotation limit [rad]

@@ -35,10 +35,10 @@ from synth.strategies.grasp import (
     transform_pin_approach,
 )
 from synth.strategies.records import Grasp, Rejection
+from synth.units import DEG
 
 FIXTURES = Path(__file__).parent.parent / "fixtures" / "tasks"
 OBSTRUCTED = "ω=180° γ=100° d=3.54 cm"
-DEG = math.pi / 180
 
 
 @pytest.fixture(scope="module")

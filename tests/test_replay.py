@@ -33,14 +33,13 @@ from synth.replay import (
     replay,
     run_machine,
 )
+from synth.units import CM, INCH
 
 ROOT = Path(__file__).parent.parent
 DATA = Path(__file__).parent / "data" / "al"
 TASKS = ROOT / "fixtures" / "tasks"
 SEED = TASKS / "seed_4_8.yaml"
 TAP = TASKS / "seed_4_8_tap.yaml"
-CM = 0.01
-INCH = 0.0254
 
 
 def axis_angle(axis: tuple[float, float, float], rad: float) -> np.ndarray:

@@ -23,10 +23,9 @@ from synth.models.workcell import TABLE, WorkcellModel
 from synth.replay.capture import admissible_tilt, captures, seat_depth, tip_placement
 from synth.replay.contact import first_contact, guided_motion
 from synth.replay.truth import HandErrors, link_error, nominal_world, sample_world
+from synth.units import CM, INCH
 
 ROOT = Path(__file__).parent.parent
-CM = 0.01
-INCH = 0.0254
 
 
 def Rz(rad: float) -> np.ndarray:

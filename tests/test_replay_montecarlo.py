@@ -56,12 +56,11 @@ from synth.replay import (
     trial_seed,
     wilson_interval,
 )
+from synth.units import CM, INCH
 
 ROOT = Path(__file__).parent.parent
 DATA = Path(__file__).parent / "data" / "al"
 SEED = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
-CM = 0.01
-INCH = 0.0254
 BOX_HALF = (4.45 * CM, 3.80 * CM)  # fixture: 8.90 × 7.60 cm
 WORKERS = max(2, min(4, os.cpu_count() or 2))
 """Processes for the 2 000-trial runs: each holds the arm and workcell (~0.2 GB), so a CI

@@ -83,6 +83,8 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
+from synth.units import CM, DEG, INCH, OZ
+
 __all__ = [
     "ANGLE",
     "BARE_UNITS",
@@ -114,13 +116,6 @@ __all__ = [
     "type_name",
     "unary",
 ]
-
-CM: float = 0.01
-"""[m] One centimetre, AL's bare length unit."""
-INCH: float = 0.0254
-"""[m] One inch."""
-OZ: float = 0.028349523125 * 9.80665
-"""[N] One ounce-force (avoirdupois ounce under standard gravity), AL's force unit."""
 
 
 class OperandError(TypeError):
@@ -701,8 +696,8 @@ UNITS: dict[str, Scalar] = {
     "INCHES": Scalar(INCH, LENGTH),
     "INCH": Scalar(INCH, LENGTH),
     "IN": Scalar(INCH, LENGTH),
-    "DEG": Scalar(math.pi / 180.0, ANGLE),
-    "DEGREES": Scalar(math.pi / 180.0, ANGLE),
+    "DEG": Scalar(DEG, ANGLE),
+    "DEGREES": Scalar(DEG, ANGLE),
     "RAD": Scalar(1.0, ANGLE),
     "SEC": Scalar(1.0, TIME),
     "OZ": Scalar(OZ, FORCE),

@@ -33,8 +33,8 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from synth.al.names import NameRole, al_name_problem
-from synth.al.values import CM, OZ
 from synth.exceptions import CodegenError
+from synth.units import CM, DEG, OZ
 
 __all__ = [
     "RESOLUTION",
@@ -64,7 +64,6 @@ L2789), which leaves angles of 100° or more only whole degrees (±0.5°, twice 
 RESOLUTION = 1e-6
 """Magnitudes below this, in the printed unit (cm, deg, oz, s, or a unit axis), print as 0."""
 
-DEG = math.pi / 180.0
 """One degree [rad]."""
 
 _PRINCIPAL_AXES = ("XHAT", "YHAT", "ZHAT")

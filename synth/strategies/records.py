@@ -17,6 +17,7 @@ import numpy as np
 import pinocchio as pin
 
 from synth.strategies.causes import classify
+from synth.units import INCH
 
 if TYPE_CHECKING:
     from synth.strategies.grasp import CenteringBounds
@@ -470,7 +471,5 @@ class PlanResult:
         }
 
 
-DEG = math.pi / 180.0
-INCH = 0.0254
 RETREAT_DISTANCE = 2 * INCH
 """How far the hand backs off after letting go when the record names no retreat [m] (L2844)."""

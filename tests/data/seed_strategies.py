@@ -27,8 +27,6 @@ printed ones, because they are what the program moves to.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pinocchio as pin
 
@@ -41,10 +39,7 @@ from synth.strategies.records import (
     Search,
     Tap,
 )
-
-CM = 0.01
-DEG = math.pi / 180.0
-OZ = 0.028349523125 * 9.80665  # ounce-force [N]
+from synth.units import CM, DEG, OZ
 
 __all__ = ["STRATEGIES", "seed_4_8", "seed_4_8_tap"]
 
