@@ -99,7 +99,7 @@ def ev(text: str, machine: Machine | None = None) -> V.Value:
     return value
 
 
-def sv(value: V.Value | None) -> tuple[float, V.Dimension]:
+def sv(value: V.Value | None) -> tuple[float, V.Exponents]:
     """A scalar as (SI value, dimension), for comparisons with pytest.approx."""
     assert isinstance(value, V.Scalar), value
     return value.value, value.dim

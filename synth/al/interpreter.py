@@ -129,8 +129,8 @@ from synth.al.values import (
     LENGTH,
     TIME,
     TORQUE,
-    Dimension,
     Event,
+    Exponents,
     OperandError,
     Pose,
     PoseKind,
@@ -1008,7 +1008,7 @@ class Interpreter:
             raise self._error(e, f"{what} must be a scalar, not {type_name(value)}")
         return value
 
-    def _dimensioned(self, e: ast.Expr, cx: _Context, dim: Dimension, what: str) -> float:
+    def _dimensioned(self, e: ast.Expr, cx: _Context, dim: Exponents, what: str) -> float:
         value = self._scalar(e, cx, what)
         return self._apply(e, lambda: coerce(value, dim, what).value)  # type: ignore[no-any-return]
 
