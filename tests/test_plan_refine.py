@@ -27,7 +27,6 @@ from synth.strategies.search import (
     plan_search,
     ring_points,
     search_extent,
-    search_rings,
 )
 from synth.strategies.tapping import (
     build_tap_lp,
@@ -194,7 +193,7 @@ def test_search_pattern_of_l2743() -> None:
     # DW = step/R from W = 0 while W < 2π: ⌈2πk⌉ points on ring k.
     assert [len(ring_points(step, k)) for k in (1, 2, 3)] == [7, 13, 19]
     # L2753: R ≤ 1.72 = 3 rings for the footprint 1.58 × 1.15 (L2716).
-    assert search_rings(1.58 * CM, 1.15 * CM, 0.762 * CM, step) == 3
+    assert search_extent(1.58 * CM, 1.15 * CM, 0.762 * CM, step)[0] == 3
     # L2436: count the points within Δx/2 = .79, Δy/2 = .575: ring 1 only (|y| ≤ .548 there,
     # ring 2 needs |x| ≤ .79 and |y| ≤ .575 at R = 1.144, impossible).
     assert expected_points(pattern_points(step, 3), 1.58 * CM, 1.15 * CM) == 7
@@ -216,7 +215,7 @@ def test_search_pattern_of_l2743() -> None:
     assert (search.rings, search.expected_points) == (3, 7)
     assert search.time == pytest.approx(7 * 0.2)
     # L2753: R ≤ 1.72; 3 × 0.5715 = 1.7145 cm (the seed printed step and bound to 3 digits).
-    assert search.max_radius == pytest.approx(1.72 * CM, abs=0.006 * CM)
+    assert search.rings * search.step == pytest.approx(1.72 * CM, abs=0.006 * CM)
 
 
 def test_tap_lp_problem_is_built_apart_from_solving(tap) -> None:

@@ -264,9 +264,6 @@ class Pose:
     def __post_init__(self) -> None:
         object.__setattr__(self, "se3", pin.SE3(self.se3))
 
-    def as_kind(self, kind: PoseKind) -> Pose:
-        """The same pose tagged ``kind``."""
-        return self if kind == self.kind else Pose(self.se3, kind)
 
 
 @dataclass(eq=False)

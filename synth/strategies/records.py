@@ -234,11 +234,6 @@ class Search:
     off_surface: OffSurface = "retract"
     """What a search move that feels nothing does (see :data:`OffSurface`)."""
 
-    @property
-    def max_radius(self) -> float:
-        """Largest ring radius [m]."""
-        return self.rings * self.step
-
     def to_json(self) -> dict[str, Any]:
         """JSON form (SI)."""
         return {

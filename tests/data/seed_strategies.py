@@ -1,7 +1,7 @@
 """The seed's two chosen strategies of §4.8 as hand-built records (no planner involved).
 
-Used by the codegen tests and by ``scripts/regen_golden.py`` when ``synth.strategies.planner``
-is not available. Every figure is the one the seed prints (seeds/000_1457622cbb9a2614.txt):
+The codegen tests emit them and compare with the seed's listings. Every figure is the one the
+seed prints (seeds/000_1457622cbb9a2614.txt):
 
 - ``seed_4_8`` — strategy 130523, PHL SPEC L2690–2710 and its program L2715–2781: ω = 315°,
   γ = 180°, d = 3.54 cm; hand at PIN1*TRANS(ROTN((.924, .383, .00106), 180°), (0, 0, 3.54) cm)
