@@ -10,6 +10,7 @@ import textwrap
 
 import numpy as np
 import pytest
+from _paths import BOX_FIXTURE_TASK
 
 from synth.errors.locate import locate_objects
 from synth.exceptions import SpecError
@@ -19,7 +20,7 @@ from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task, parse_task
 from synth.units import CM
 
-FIXTURE = "fixtures/tasks/box_in_fixture.yaml"
+FIXTURE = BOX_FIXTURE_TASK
 
 BASE = textwrap.dedent(
     """\

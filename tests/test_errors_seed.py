@@ -10,6 +10,7 @@ import math
 import numpy as np
 import pinocchio as pin
 import pytest
+from _paths import DATA, TASKS
 
 from synth.errors.bounds import build_error_lp, closed_form_bound, solve_error_lp
 from synth.errors.chain import ErrorChain, Fixed, chain_between
@@ -18,7 +19,7 @@ from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
 from synth.units import CM
 
-FIXTURES = "fixtures/tasks"
+FIXTURES = TASKS
 
 
 @pytest.fixture(scope="module")
@@ -29,7 +30,7 @@ def screw() -> tuple[AttributeGraph, ErrorChain]:
 
 @pytest.fixture(scope="module")
 def approach() -> tuple[AttributeGraph, ErrorChain]:
-    graph = AttributeGraph(load_task("tests/data/seed_4_5.yaml"))
+    graph = AttributeGraph(load_task(DATA / "seed_4_5.yaml"))
     return graph, chain_between(graph, "hole", "pin")
 
 

@@ -13,6 +13,7 @@ import math
 from pathlib import Path
 
 import pytest
+from _paths import TASKS
 from _tasks import plannable
 
 from synth.cli import main
@@ -21,7 +22,7 @@ from synth.models.loader import load_task, parse_task
 from synth.strategies import PlanOptions, plan_task
 from synth.units import CM, INCH
 
-FIXTURES = Path("fixtures/tasks")
+FIXTURES = TASKS
 
 
 @pytest.fixture(scope="module")
@@ -118,7 +119,7 @@ def test_decisions_do_not_depend_on_the_timing_rule() -> None:
 
 
 def test_cli_json_and_text(capsys) -> None:
-    assert main(["plan", str(FIXTURES / "seed_4_8.yaml"), "--json"]) == 0
+    assert main(["plan", str(FIXTURES / "seed_4_8.yaml"), "--json", "--proof-trials", "0"]) == 0
     doc = json.loads(capsys.readouterr().out)
     strategy = doc["strategy"]
     assert strategy["tap"] is None
@@ -140,7 +141,19 @@ def test_cli_json_and_text(capsys) -> None:
     assert doc["counters"]["ik"] > 0
     assert all({"candidate", "reason", "cause", "stage"} == set(r) for r in doc["rejected"])
 
-    assert main(["plan", str(FIXTURES / "seed_4_8_tap.yaml"), "--exhaustive", "--records"]) == 0
+    assert (
+        main(
+            [
+                "plan",
+                str(FIXTURES / "seed_4_8_tap.yaml"),
+                "--exhaustive",
+                "--records",
+                "--proof-trials",
+                "0",
+            ]
+        )
+        == 0
+    )
     out = capsys.readouterr().out
     assert "PHL SPEC" in out and "TAP: PIN1=BH1*TRANS(" in out and "SEARCH: NULL_RECORD" in out
     assert "tap: Δz" in out and "no search" in out and "exhaustive refined" in out

@@ -11,6 +11,7 @@ import math
 import numpy as np
 import pinocchio as pin
 import pytest
+from _paths import SEED_TASK
 
 from synth.errors.estimate import RelationModel
 from synth.models.loader import load_task
@@ -39,7 +40,7 @@ OPTS = PlanOptions()
 
 @pytest.fixture(scope="module")
 def ctx():
-    return build_context(load_task("fixtures/tasks/seed_4_8.yaml"))
+    return build_context(load_task(SEED_TASK))
 
 
 @pytest.fixture(scope="module")

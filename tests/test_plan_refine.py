@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 import pytest
+from _paths import SEED_TAP_TASK, SEED_TASK
 
 from synth.errors.bounds import build_error_lp
 from synth.models.loader import load_task
@@ -47,12 +48,12 @@ def world_with(ctx, omega: float, gamma: float):
 
 @pytest.fixture(scope="module")
 def seed():
-    return build_context(load_task("fixtures/tasks/seed_4_8.yaml"))
+    return build_context(load_task(SEED_TASK))
 
 
 @pytest.fixture(scope="module")
 def tap():
-    return build_context(load_task("fixtures/tasks/seed_4_8_tap.yaml"))
+    return build_context(load_task(SEED_TAP_TASK))
 
 
 def test_footprint_of_the_seeds_best_strategy(seed) -> None:
