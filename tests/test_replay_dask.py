@@ -12,12 +12,11 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+import distributed
 import pytest
 
 from synth.cli import main
 from synth.replay import replay
-
-distributed = pytest.importorskip("distributed")
 
 ROOT = Path(__file__).parent.parent
 SEED_TASK = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
