@@ -96,16 +96,17 @@ def wilson_interval(
 ) -> tuple[float, float]:
     """Wilson score interval of a binomial proportion (default 95%: z = Φ⁻¹(0.975)).
 
-    p̂ = k/n, centre (p̂ + z²/2n)/(1 + z²/n), half-width z·√(p̂(1−p̂)/n + z²/4n²)/(1 + z²/n).
+    scipy's ``binomtest(k, n).proportion_ci(method="wilson")`` at confidence erf(z/√2): centre
+    (p̂ + z²/2n)/(1 + z²/n), half-width z·√(p̂(1−p̂)/n + z²/4n²)/(1 + z²/n), p̂ = k/n.
     """
     if trials <= 0:
         return (0.0, 1.0)
-    p = successes / trials
-    z2 = z * z
-    denominator = 1.0 + z2 / trials
-    centre = (p + z2 / (2 * trials)) / denominator
-    half = z * math.sqrt(p * (1 - p) / trials + z2 / (4 * trials * trials)) / denominator
-    return (max(0.0, centre - half), min(1.0, centre + half))
+    from scipy.stats import binomtest  # scipy.stats is slow to import; most runs never ask
+
+    interval = binomtest(successes, trials).proportion_ci(
+        confidence_level=math.erf(z / math.sqrt(2.0)), method="wilson"
+    )
+    return (float(interval.low), float(interval.high))
 
 
 @dataclass(frozen=True)
