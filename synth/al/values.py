@@ -265,7 +265,6 @@ class Pose:
         object.__setattr__(self, "se3", pin.SE3(self.se3))
 
 
-
 @dataclass(eq=False)
 class Event:
     """An AL event: ``SIGNAL`` adds one to ``count``; ``WAIT`` takes one, or blocks while 0."""
