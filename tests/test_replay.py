@@ -344,7 +344,7 @@ def test_cli_progress_bar_goes_to_stderr_when_asked(capsys: pytest.CaptureFixtur
         search, "--task", str(SEED), "--trials", "20", "--workers", "1", "--progress",
         capsys=capsys,
     )  # fmt: skip
-    assert code == 0 and "20/20 trials" in err and "trials" in out
+    assert code == 0 and "| 20/20 [" in err and "trial/s]" in err and "trials" in out
 
 
 def test_console_script_runs_as_a_process(tmp_path: Path) -> None:

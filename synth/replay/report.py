@@ -34,7 +34,6 @@ __all__ = [
     "RunReport",
     "Violation",
     "ViolationKind",
-    "replay_summary",
     "wilson_interval",
 ]
 
@@ -182,38 +181,3 @@ class ReplayReport:
         if self.interrupted:
             out["interrupted"] = {"done": self.monte_carlo.trials, "planned": self.planned}
         return out
-
-
-def _seconds(value: float | None) -> str:
-    return "-" if value is None else f"{value:.2f} s"
-
-
-def replay_summary(report: ReplayReport) -> str:
-    """The report as text: the nominal run, its violations, and the Monte Carlo summary."""
-    n = report.nominal
-    lines = [f"replay {report.program} on task {report.task}"]
-    where = f" (line {n.line})" if n.line is not None else ""
-    lines.append(
-        f"nominal: {n.outcome}{where}: {n.message}; {_seconds(n.time)}, {n.statements} statements"
-    )
-    for v in n.violations:
-        lines.append(f"  violation: {v.kind} at line {v.line}: {v.detail}")
-    mc = report.monte_carlo
-    if mc.trials:
-        lo, hi = mc.interval()
-        rate = mc.success_rate or 0.0
-        counts = ", ".join(f"{k} {v}" for k, v in mc.outcomes.items())
-        lines.append(
-            f"Monte Carlo: {mc.trials} trials (seed {mc.seed}): success {100 * rate:.1f}% "
-            f"(95% Wilson interval {100 * lo:.1f}–{100 * hi:.1f}%)"
-        )
-        lines.append(f"  outcomes: {counts}")
-        lines.append(f"  time: mean {_seconds(mc.time_mean)}, p95 {_seconds(mc.time_p95)}")
-    else:
-        lines.append("Monte Carlo: no trials")
-    if report.interrupted:
-        lines.append(
-            f"  interrupted: {mc.trials} of {report.planned} trials done (Ctrl-C); "
-            "the figures above are over those"
-        )
-    return "\n".join(lines)
