@@ -10,6 +10,7 @@ import time
 from pathlib import Path
 
 import pytest
+from pydantic import ValidationError
 
 from server.db import NewPlan, PlanStore
 from server.errors import problem_for
@@ -20,7 +21,7 @@ from server.exceptions import (
     WorkerFailed,
 )
 from server.modelpaths import resolve_model_file
-from server.settings import settings_from_env
+from server.settings import Settings, SettingsError, settings_from_env
 from server.workers import WorkerPool
 from synth.exceptions import ALSyntaxError, SpecError, SynthError
 from synth.models.loader import parse_task
@@ -48,12 +49,38 @@ def test_settings_from_env(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(
-    "env",
-    [{"SYNTH_WORKERS": "many"}, {"SYNTH_WORKERS": "0"}, {"SYNTH_PLAN_TIMEOUT": "-1"}],
+    ("env", "message"),
+    [
+        ({"SYNTH_WORKERS": "many"}, "SYNTH_WORKERS='many': Input should be a valid integer"),
+        ({"SYNTH_WORKERS": "0"}, "SYNTH_WORKERS='0': Input should be greater than or equal to 1"),
+        ({"SYNTH_PLAN_TIMEOUT": "-1"}, "SYNTH_PLAN_TIMEOUT='-1': Input should be greater than 0"),
+        ({"SYNTH_DB": ""}, "SYNTH_DB='': String should have at least 1 character"),
+        ({"SYNTH_PROTECT_READS": "maybe"}, "SYNTH_PROTECT_READS='maybe': Input should be a valid"),
+        ({"SYNTH_TRIALS": "300"}, "the default trials (300, SYNTH_TRIALS) exceed the maximum"),
+    ],
 )
-def test_bad_settings_are_value_errors(env: dict[str, str]) -> None:
-    with pytest.raises(ValueError):
+def test_bad_settings_name_the_variable(env: dict[str, str], message: str) -> None:
+    with pytest.raises(SettingsError) as info:
         settings_from_env(env)
+    assert isinstance(info.value, ValueError)  # what `synth serve` reports as a usage error
+    assert str(info.value).startswith(message)
+
+
+def test_settings_come_from_the_environment_only_when_asked(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setenv("SYNTH_TOKEN", "from-the-shell")
+    monkeypatch.setenv("SYNTH_MAX_TRIALS", "50")
+    assert Settings().token is None  # a test's (or a caller's) settings ignore the shell
+    from_env = settings_from_env()
+    assert from_env.token == "from-the-shell" and from_env.max_trials == 50
+    # The CLI's flags over the environment: validated and normalised like the environment.
+    changed = from_env.with_(db_url="relative.db", model_dirs=("/tmp/../tmp",))
+    assert changed.db_url.startswith("sqlite:////") and changed.model_dirs == (Path("/tmp"),)
+    with pytest.raises(SettingsError, match="SYNTH_WORKERS=0"):
+        from_env.with_(workers=0)
+    with pytest.raises(ValidationError):  # frozen
+        from_env.workers = 3  # type: ignore[misc]
 
 
 # -- model paths ----------------------------------------------------------------------------------
