@@ -1,7 +1,9 @@
 """The FastAPI application: :func:`create_app` composes settings, routers, limits and errors.
 
 ``synth serve`` runs ``create_app(settings)`` under uvicorn. At startup the app opens the
-database (creating tables) and starts the worker processes; at shutdown it stops them.
+database (creating tables), starts the worker processes and recovers the jobs of the previous
+run (:mod:`server.jobs`: running ones are lost, queued ones queued again); at shutdown it stops
+the jobs (running ones go back to the queue), then the workers.
 """
 
 from __future__ import annotations
@@ -19,14 +21,16 @@ from server.deps import current_settings
 from server.errors import install_error_handlers
 from server.lanes import Lanes
 from server.limits import BodyLimitMiddleware
-from server.routers import health, pictures, plans, replays
+from server.routers import health, jobs, pictures, plans, replays
 from server.settings import Settings, get_settings
 from server.workers import WorkerPool
 
 DESCRIPTION = """\
 Submit a pin-in-hole task spec; get an AL program planned after R. H. Taylor (1976),
-validated by replaying it on a simulated arm. See `docs/api.md` for the access rule, limits
-and curl examples. Errors are RFC 9457 problem documents (`application/problem+json`).
+proven by replaying it on a simulated arm. Planning and replays run as jobs: a submission is
+answered `202` with the job's URL, which you poll (or long-poll with `?wait=S`) until it is
+`done` or `failed`. See `docs/api.md` for the job flow, the access rule, limits and curl
+examples. Errors are RFC 9457 problem documents (`application/problem+json`).
 """
 
 
@@ -38,6 +42,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         store = PlanStore(settings.db_url)
         await asyncio.to_thread(store.create_schema)
+        await asyncio.to_thread(service.warm_up_parser)
         pool = WorkerPool(
             settings.workers,
             warmup="server.service:warm_up",
@@ -45,10 +50,13 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         )
         await pool.start()
         lanes = Lanes(settings.workers, settings.client_jobs, settings.queue_per_client)
-        app.state.service = service.PlanService(store, pool, lanes)
+        app.state.service = service.PlanService(store, pool, lanes, settings)
+        await app.state.service.jobs.start()
         try:
             yield
         finally:
+            pool.stop_replacing()
+            await app.state.service.jobs.close()
             await pool.close()
             store.close()
 
@@ -67,6 +75,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     install_error_handlers(app)  # last: its middleware wraps the others
     app.include_router(health.router)
     app.include_router(plans.router)
+    app.include_router(jobs.router)
     app.include_router(replays.router)
     app.include_router(pictures.router)
     return app
