@@ -4,6 +4,10 @@
 database (creating tables), starts the worker processes and recovers the jobs of the previous
 run (:mod:`server.jobs`: running ones are lost, queued ones queued again); at shutdown it stops
 the jobs (running ones go back to the queue), then the workers.
+
+The interactive docs (``/docs``: Swagger UI, ``/redoc``: ReDoc) load their scripts and styles
+from ``/static/`` (vendored in ``server/static/``, see its README), never from a CDN, so they
+work on a network without internet access.
 """
 
 from __future__ import annotations
@@ -11,8 +15,12 @@ from __future__ import annotations
 import asyncio
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
+from pathlib import Path
 
 from fastapi import FastAPI
+from fastapi.openapi.docs import get_redoc_html, get_swagger_ui_html
+from fastapi.responses import HTMLResponse
+from fastapi.staticfiles import StaticFiles
 
 import synth
 from server import service
@@ -24,6 +32,8 @@ from server.limits import BodyLimitMiddleware
 from server.routers import health, jobs, pictures, plans, replays
 from server.settings import Settings, get_settings
 from server.workers import WorkerPool
+
+STATIC = Path(__file__).resolve().parent / "static"
 
 DESCRIPTION = """\
 Submit a pin-in-hole task spec; get an AL program planned after R. H. Taylor (1976),
@@ -65,6 +75,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         version=synth.__version__,
         description=DESCRIPTION,
         lifespan=lifespan,
+        docs_url=None,
+        redoc_url=None,
     )
     app.dependency_overrides[get_settings] = lambda: settings
     app.add_middleware(
@@ -73,12 +85,39 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         timeout=lambda _scope: current_settings(app).body_timeout,
     )
     install_error_handlers(app)  # last: its middleware wraps the others
+    app.mount("/static", StaticFiles(directory=STATIC), name="static")
+    _add_docs(app)
     app.include_router(health.router)
     app.include_router(plans.router)
     app.include_router(jobs.router)
     app.include_router(replays.router)
     app.include_router(pictures.router)
     return app
+
+
+def _add_docs(app: FastAPI) -> None:
+    """``/docs`` (Swagger UI) and ``/redoc`` (ReDoc), from the vendored assets only."""
+    openapi_url = app.openapi_url or "/openapi.json"
+
+    @app.get("/docs", include_in_schema=False)
+    async def swagger_ui() -> HTMLResponse:
+        return get_swagger_ui_html(
+            openapi_url=openapi_url,
+            title=f"{app.title} — Swagger UI",
+            swagger_js_url="/static/swagger-ui/swagger-ui-bundle.js",
+            swagger_css_url="/static/swagger-ui/swagger-ui.css",
+            swagger_favicon_url="/static/swagger-ui/favicon-32x32.png",
+        )
+
+    @app.get("/redoc", include_in_schema=False)
+    async def redoc() -> HTMLResponse:
+        return get_redoc_html(
+            openapi_url=openapi_url,
+            title=f"{app.title} — ReDoc",
+            redoc_js_url="/static/redoc/redoc.standalone.js",
+            redoc_favicon_url="/static/swagger-ui/favicon-32x32.png",
+            with_google_fonts=False,
+        )
 
 
 __all__ = ["create_app"]
