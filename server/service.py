@@ -175,13 +175,13 @@ def plan_job(
     spec = _spec_for_server(body, kind, model_dirs)
     from synth.pipeline import SynthesisOptions, synthesize
     from synth.replay.proof import ProofOptions
-    from synth.strategies.options import PlanOptions as PlannerOptions
+    from synth.strategies.options import PlanOptions
 
     trials = options["trials"] if options["validate"] else 0
     synthesis = synthesize(
         spec,
         SynthesisOptions(
-            plan=PlannerOptions(try_harder=options["try_harder"], exhaustive=options["exhaustive"]),
+            plan=PlanOptions(try_harder=options["try_harder"], exhaustive=options["exhaustive"]),
             # One worker: the job already runs in a worker process of the server's pool.
             proof=ProofOptions.for_task(spec, trials=trials, seed=options["seed"], workers=1),
         ),
@@ -216,8 +216,8 @@ def replay_job(
 
 
 @dataclass(frozen=True)
-class PlanOptions:
-    """Options of one planning request.
+class PlanRequest:
+    """Options of one planning request (the planner's own: :class:`synth.strategies.PlanOptions`).
 
     ``trials``: Monte Carlo trials of the replay; ``seed``: its random seed; ``validate``:
     replay at all; ``try_harder`` and ``exhaustive`` are passed to the planner.
@@ -342,7 +342,7 @@ class PlanService:
         self,
         body: bytes,
         content_type: str | None,
-        options: PlanOptions,
+        options: PlanRequest,
         settings: Settings,
         client: str = "-",
     ) -> StoredJob:
@@ -487,7 +487,7 @@ def _is_id(text: str) -> bool:
 
 __all__ = [
     "ACCEPTED_MEDIA_TYPES",
-    "PlanOptions",
+    "PlanRequest",
     "PlanService",
     "content_hash",
     "parse_spec",

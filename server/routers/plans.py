@@ -24,7 +24,7 @@ from server.schemas import (
     PlanSummary,
     problem_responses,
 )
-from server.service import PlanOptions
+from server.service import PlanRequest
 from server.settings import Settings
 from server.views import (
     WaitQuery,
@@ -79,8 +79,8 @@ _SPEC_BODY: dict[str, Any] = {
 
 def _options(
     trials: int, seed: int, try_harder: bool, exhaustive: bool, validate: bool
-) -> PlanOptions:
-    return PlanOptions(  # trials and seed mean nothing without a replay: same hash
+) -> PlanRequest:
+    return PlanRequest(  # trials and seed mean nothing without a replay: same hash
         trials=trials if validate else 0,
         seed=seed if validate else 0,
         try_harder=try_harder,
@@ -140,7 +140,7 @@ async def create_plan(
     return await answer_submission(service, job, wait, response)
 
 
-def _batch_item(index: int, raw: Any, settings: Settings) -> tuple[bytes, str, PlanOptions]:
+def _batch_item(index: int, raw: Any, settings: Settings) -> tuple[bytes, str, PlanRequest]:
     """The body, content type and options of task ``index`` of a batch (422 if invalid)."""
     task = BatchTaskIn.model_validate(raw)
     trials = checked_trials(task.trials, settings, parameter=f"tasks[{index}].trials")
