@@ -6,19 +6,18 @@ in one of ``size`` long-lived worker processes (with synth imported once); a job
 overruns is answered with :class:`~server.errors.TimeBudgetExceeded` and its worker is killed
 and replaced. The event loop never blocks: it waits on the worker's pipe with ``add_reader``.
 
-Why not a library pool (issue 15 asked, and it was weighed): ``concurrent.futures``'
-``ProcessPoolExecutor`` cannot stop a running call — a timed-out or cancelled job would keep
-its core — and killing one of its processes breaks the whole executor (``BrokenProcessPool``
-for every queued job); ``max_tasks_per_child`` recycles workers but bounds nothing. pebble's
-``ProcessPool`` does stop a task on timeout or cancel by terminating its worker, and an
-initializer could set the memory cap, but its workers are ``multiprocessing`` children: forked
-from the threaded server (unsafe), or spawned/forkserver'd, which re-imports the server's
-``__main__`` in every worker (the BrokenProcessPool-in-a-script trap of issue 18); it cannot
-retire just the worker that hit ``MemoryError``; and it exposes no per-worker readiness, which
-``/healthz`` (``idle``) and the jobs' wait for a worker use. This pool keeps those semantics in
-one place: fresh ``python -m server.workers`` interpreters, a budget that kills exactly the
-overrunning worker, cancellation that does the same (``DELETE`` of a running job), the
-address-space cap, and replacement after a crash or a ``MemoryError``.
+Why not a library pool: ``concurrent.futures``' ``ProcessPoolExecutor`` cannot stop a running call
+— a timed-out or cancelled job would keep its core — and killing one of its processes breaks the
+whole executor (``BrokenProcessPool`` for every queued job); ``max_tasks_per_child`` recycles
+workers but bounds nothing. pebble's ``ProcessPool`` does stop a task on timeout or cancel by
+terminating its worker, and an initializer could set the memory cap, but its workers are
+``multiprocessing`` children: forked from the threaded server (unsafe), or spawned/forkserver'd,
+which re-imports the server's ``__main__`` in every worker (a BrokenProcessPool in a script without
+a ``__main__`` guard); it cannot retire just the worker that hit ``MemoryError``; and it exposes no
+per-worker readiness, which ``/healthz`` (``idle``) and the jobs' wait for a worker use. This pool
+keeps those semantics in one place: fresh ``python -m server.workers`` interpreters, a budget that
+kills exactly the overrunning worker, cancellation that does the same (``DELETE`` of a running
+job), the address-space cap, and replacement after a crash or a ``MemoryError``.
 
 A job is a picklable top-level callable and its arguments. A :class:`~synth.exceptions.SynthError`
 raised in a worker is rebuilt in the server as the same class with the same fields, so the one

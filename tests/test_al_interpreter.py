@@ -1,4 +1,4 @@
-"""AL values, interpreter, machine protocol and world binding (issue 6, items 2 and 5).
+"""AL values, interpreter, machine protocol and world binding.
 
 Oracles are independent of the code under test: frames composed by hand (rotation matrices
 written out, translations added in centimetres), the seed's numbers (design.md: T_wp, T_wb,

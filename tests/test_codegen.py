@@ -1,4 +1,4 @@
-"""AL code generation (issue 5): golden files, the seed's listings, parsing, running.
+"""AL code generation: golden files, the seed's listings, parsing, running.
 
 Oracles: the seed's own generated programs (seeds/000_1457622cbb9a2614.txt L2715–2781 and
 L2804–2844, normalised in tests/data/al/), our parser and printer, and the AL interpreter on a
@@ -466,7 +466,7 @@ def test_golden_search_backs_out_of_a_point_where_nothing_is_felt() -> None:
 
 @pytest.mark.parametrize("task", TASKS)
 def test_golden_programs_replay_successfully_in_the_nominal_world(task: str) -> None:
-    # Issue 5: every emitted program parses and replays in the nominal world (the referee).
+    # Every emitted program parses and replays in the nominal world (the referee).
     from synth.replay import replay
 
     report = replay(

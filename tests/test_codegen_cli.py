@@ -1,4 +1,4 @@
-"""``synth plan TASK.yaml -o PROGRAM.al [--preamble] [--json]`` (issue 5, item 4)."""
+"""``synth plan TASK.yaml -o PROGRAM.al [--preamble] [--json]``."""
 
 from __future__ import annotations
 

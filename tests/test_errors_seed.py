@@ -147,7 +147,7 @@ def test_certified_bounds_hold_where_first_order_fails(
         assert dtheta[:, k].max() <= iv.hi and dtheta[:, k].min() >= iv.lo
     assert tilt.max() <= cert.tilt
     # The first-order bound is exceeded: rotations bend the 3.18 cm screw and 28.6 cm driver.
-    # About 3.18·(1 − cos 5° cos 5°) ≈ .024 cm extra along z, so |Δz| ≈ .15 cm (issue text).
+    # About 3.18·(1 − cos 5° cos 5°) ≈ .024 cm extra along z, so |Δz| ≈ .15 cm (seed A.2).
     assert np.abs(dp[:, 2]).max() > first.dz.hi * 1.15
     assert np.abs(dp[:, 2]).max() == pytest.approx(0.15 * CM, rel=0.05)
     assert np.abs(dp[:, 0]).max() > first.dx.hi

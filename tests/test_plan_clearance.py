@@ -1,6 +1,6 @@
 """Gross motions swept by the planner (synth/strategies/clearance.py), judged by the replay.
 
-The referee for "is this move clear" is the replay (issue 5: "every emitted program must parse
+The referee for "is this move clear" is the replay ("every emitted program must parse
 and replay successfully in the nominal world"); the sweep's own correctness is checked against
 dense sampling of the same joint-space segment with Coal's exact distances.
 

@@ -1,4 +1,4 @@
-"""synth replay (issue 6, items 3, 4 and 6): the seed's programs in the believed world, programs
+"""synth replay: the seed's programs in the believed world, programs
 the arm cannot run, and the command line.
 
 Oracles: poses composed by hand from the seed's numbers (BH1 at (49.05, 105.2, 4.90) cm, the

@@ -1,4 +1,4 @@
-"""Bounded Monte Carlo work (issue 19, deliverable 4): streamed trials, a tally, capped workers."""
+"""Bounded Monte Carlo work: streamed trials, a tally, capped workers."""
 
 from __future__ import annotations
 

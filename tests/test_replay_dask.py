@@ -1,4 +1,4 @@
-"""Monte Carlo trials on a Dask cluster (issue 14): the report of a local run with the same seed.
+"""Monte Carlo trials on a Dask cluster: the report of a local run with the same seed.
 
 A ``LocalCluster`` of two single-threaded worker processes runs the trials of the seed's search
 listing; every trial's run (outcome, line, message, time to the last bit, statements) and the

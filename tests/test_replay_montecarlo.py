@@ -1,4 +1,4 @@
-"""Monte Carlo replays of the seed's programs on seed_4_8 (issue 6, item 6).
+"""Monte Carlo replays of the seed's programs on seed_4_8.
 
 **Search listing (L2715–2781).** Measured with this replay, the arm at (20, 70) cm and the
 box 8.90 × 7.60 cm (seed L2340–2350): 1948 successes in 2000 trials (seed 0), rate 0.974, 95%

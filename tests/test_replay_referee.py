@@ -1,4 +1,4 @@
-"""The referee's fast path and its diagnostics (issue 14).
+"""The referee's fast path and its diagnostics.
 
 **Recorded outcome counts.** On main at 14ae6b0, before the fast path, each of
 

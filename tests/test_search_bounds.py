@@ -1,4 +1,4 @@
-"""The search pattern's size is bounded before it is enumerated (issue 19, deliverable 4)."""
+"""The search pattern's size is bounded before it is enumerated."""
 
 from __future__ import annotations
 

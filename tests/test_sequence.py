@@ -1,4 +1,4 @@
-"""Assembly sequences (issue 16): the spec, what a seat teaches, one program, proven as a whole.
+"""Assembly sequences: the spec, what a seat teaches, one program, proven as a whole.
 
 Oracles: exact SE3 composition of the seed's error model (True = Nominal ∘ transl(t) ∘ rot(ẑ, rz))
 against the certified rows of synth/errors/seat.py; the replay's true worlds against the

@@ -1,6 +1,6 @@
 """What a replay reports: violations, one run's outcome, the Monte Carlo summary, the whole report.
 
-The JSON shape (issue 6, SI units) is the one ``synth replay --json`` prints and the HTTP API
+The JSON shape (SI units) is the one ``synth replay --json`` prints and the HTTP API
 returns::
 
     {"ok": bool,
@@ -172,7 +172,7 @@ class ReplayReport:
         return self.nominal.success
 
     def to_json(self) -> dict[str, Any]:
-        """The report as JSON (issue 6 shape, SI units)."""
+        """The report as JSON (SI units)."""
         out: dict[str, Any] = {
             "ok": self.ok,
             "nominal": self.nominal.to_json(),

@@ -3,8 +3,8 @@
 A :class:`PinInHoleStrategy` holds everything code generation needs — every number a template
 prints comes from here (the codegen must not decide anything). Destination points follow the
 seed's (what, base, xf) form (L1912–1925): make the controllable frame ``what`` coincide with
-``base ∘ xf``. ``to_json`` gives the shapes of ``synth plan --json`` (issue "strategy
-generation"), which the HTTP API returns too.
+``base ∘ xf``. ``to_json`` gives the shapes of ``synth plan --json``, which the HTTP API
+returns too.
 """
 
 from __future__ import annotations

@@ -15,7 +15,8 @@ code other than 0, 1 (``replay``: the program failed) and 2 (a clear refusal) is
 (``exit 70``: the CLI's internal error). In the API a
 status 500 or a dropped connection is an *HTTP 500*, a 504 a *hang*, a memory-budget 422
 *over-memory*; a 202 (a plan or replay job) is followed to its end, and its problem, if it
-failed, counts by its status (a *lost* job is a crash). Each case is a Hypothesis example (generation only, no shrinking).
+failed, counts by its status (a *lost* job is a crash). Each case is a Hypothesis example
+(generation only, no shrinking).
 
 Usage: ``python tests/fuzz/fuzzrun.py [--cases N] [--timeout S] [--memory-mib M]
 [--surface spec,al,api] [--out DIR] [--seed K]``. Exit status 1 when any count but ``ok`` is
