@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test lint typecheck bench fuzz clean browser
+.PHONY: demo test test-slow lint typecheck bench fuzz clean browser
 
 FUZZ_CASES ?= 1000
 FUZZ_ARGS  ?=
@@ -37,8 +37,13 @@ browser:
 	       || { apt-get update && DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends chromium; }; } \
 	  || echo "chromium not installed: the browser test will skip"; }
 
+# The default suite leaves out the long Monte Carlo runs (pytest -m "not slow", pyproject.toml)
+# and spreads the tests over the cores; `make test-slow` runs the rest.
 test: $(STAMP) lint typecheck browser
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest -n auto
+
+test-slow: $(STAMP)
+	$(BIN)/python -m pytest -n auto -m slow
 
 bench: $(STAMP)
 	for b in benchmarks/*.py; do $(BIN)/python $$b || exit 1; done

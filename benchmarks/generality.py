@@ -1,4 +1,4 @@
-"""Generality suite (issue 12): synthesize and prove a program for every task of the manifest.
+"""Generality suite: synthesize and prove a program for every task of the manifest.
 
 Usage: python benchmarks/generality.py [--trials N] [--workers W] [--fast] [--only NAME] [--why]
                                       [--check] [--no-seed-fixtures]
@@ -36,7 +36,7 @@ ROOT = Path(__file__).resolve().parent.parent
 SUITE = ROOT / "fixtures" / "tasks" / "generality"
 MANIFEST = SUITE / "expected.yaml"
 MIN_SUCCESS = 0.99
-"""Monte Carlo success rate a plannable task's program must reach (issue 12)."""
+"""Monte Carlo success rate a plannable task's program must reach."""
 
 
 @dataclass(frozen=True)

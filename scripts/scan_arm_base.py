@@ -65,6 +65,7 @@ from synth.models.spec import Pose, TaskSpec  # noqa: E402
 from synth.pipeline import SynthesisOptions, synthesize  # noqa: E402
 from synth.replay import replay  # noqa: E402
 from synth.replay.proof import ProofOptions  # noqa: E402
+from synth.units import CM, DEG, INCH  # noqa: E402
 
 TASKS_DIR = ROOT / "fixtures" / "tasks"
 NOMINAL_PROOF = SynthesisOptions(proof=ProofOptions(trials=0))
@@ -75,9 +76,6 @@ LISTINGS: tuple[tuple[str, str], ...] = (
     ("seed_4_8_tap", "seed_4_8_tap.al"),
 )
 PLANNED: tuple[str, ...] = ("seed_4_8", "seed_4_8_tap", "seed_4_8_fixture")
-CM = 0.01
-INCH = 0.0254
-DEG = math.pi / 180
 GRASP_DISTANCE = 3.54 * CM  # L2595
 REACH_JOINTS = [0, 1, 2, 4]  # θ1, θ2, S3, θ5
 

@@ -18,8 +18,8 @@ request schema errors (FastAPI)       422     ``errors`` (``loc`` and ``msg`` pe
 :class:`PayloadTooLarge`              413     ``limit_bytes``
 :class:`UnsupportedMediaType`         415     ``accepted``
 :class:`ServiceBusy`                  503     (``Retry-After``)
-:class:`StageUnavailable`             503
-:class:`ReplayUnavailable`            503
+:class:`JobLost`                      503     (a job's problem, never a response)
+:class:`JobCancelled`                 409     (a job's problem, never a response)
 :class:`TimeBudgetExceeded`           504     ``budget_seconds``
 anything else, :class:`WorkerFailed`  500     nothing but a request id; the traceback is logged
 :class:`RequestTimeout`               408     (``Connection: close``)
@@ -37,7 +37,7 @@ import logging
 import math
 import re
 import uuid
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from fastapi import FastAPI, Request
@@ -52,10 +52,8 @@ from server.exceptions import (
     MemoryBudgetExceeded,
     NotFound,
     PayloadTooLarge,
-    ReplayUnavailable,
     RequestTimeout,
     ServiceBusy,
-    StageUnavailable,
     TimeBudgetExceeded,
     TooManyRequests,
     Unauthorized,
@@ -171,8 +169,8 @@ def problem_for(exc: BaseException) -> tuple[int, dict[str, Any], Mapping[str, s
     return 500, body, {}
 
 
-def problem_response(exc: BaseException) -> JSONResponse:
-    """The response for ``exc``; genuine bugs are logged with their traceback."""
+def _logged(exc: BaseException) -> tuple[int, dict[str, Any], Mapping[str, str]]:
+    """:func:`problem_for`, logging a genuine bug (500) with its traceback."""
     status, body, headers = problem_for(exc)
     if status == 500:
         remote = getattr(exc, "remote_traceback", "")
@@ -183,6 +181,17 @@ def problem_response(exc: BaseException) -> JSONResponse:
             f"\nworker traceback:\n{remote}" if remote else "",
             exc_info=(type(exc), exc, exc.__traceback__),
         )
+    return status, body, headers
+
+
+def problem_document(exc: BaseException) -> dict[str, Any]:
+    """The problem document of ``exc`` (a job's outcome, a batch item's answer); bugs logged."""
+    return _logged(exc)[1]
+
+
+def problem_response(exc: BaseException) -> JSONResponse:
+    """The response for ``exc``; genuine bugs are logged with their traceback."""
+    status, body, headers = _logged(exc)
     return JSONResponse(
         body, status_code=status, headers=dict(headers), media_type=PROBLEM_MEDIA_TYPE
     )
@@ -192,22 +201,28 @@ async def _on_exception(_request: Request, exc: Exception) -> JSONResponse:
     return problem_response(exc)
 
 
-async def _on_request_validation(_request: Request, exc: Exception) -> JSONResponse:
-    assert isinstance(exc, RequestValidationError)
-    errors = [
+def validation_problem(errors: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+    """The 422 problem document of pydantic validation ``errors`` (``loc`` and ``msg`` each)."""
+    listed = [
         {"loc": jsonable(e.get("loc", ())), "msg": str(e.get("msg", "invalid value"))}
-        for e in exc.errors()
+        for e in errors
     ]
-    first = errors[0] if errors else {"loc": [], "msg": "invalid request"}
+    first = listed[0] if listed else {"loc": [], "msg": "invalid request"}
     where = ".".join(str(p) for p in first["loc"])
-    body = {
+    return {
         "type": "urn:synth:problem:request",
         "title": "Invalid request",
         "status": 422,
         "detail": f"{where}: {first['msg']}" if where else first["msg"],
-        "errors": errors,
+        "errors": listed,
     }
-    return JSONResponse(body, status_code=422, media_type=PROBLEM_MEDIA_TYPE)
+
+
+async def _on_request_validation(_request: Request, exc: Exception) -> JSONResponse:
+    assert isinstance(exc, RequestValidationError)
+    return JSONResponse(
+        validation_problem(exc.errors()), status_code=422, media_type=PROBLEM_MEDIA_TYPE
+    )
 
 
 async def _on_http_exception(_request: Request, exc: Exception) -> JSONResponse:
@@ -282,10 +297,8 @@ __all__ = [
     "NotFound",
     "PayloadTooLarge",
     "ProblemMiddleware",
-    "ReplayUnavailable",
     "RequestTimeout",
     "ServiceBusy",
-    "StageUnavailable",
     "TimeBudgetExceeded",
     "TooManyRequests",
     "Unauthorized",
@@ -293,6 +306,8 @@ __all__ = [
     "WorkerFailed",
     "install_error_handlers",
     "jsonable",
+    "problem_document",
     "problem_for",
     "problem_response",
+    "validation_problem",
 ]

@@ -39,7 +39,7 @@ class Unauthorized(ApiError):
 
 
 class NotFound(ApiError):
-    """No plan with that id."""
+    """No plan or job with that id."""
 
     status = 404
     title = "Not found"
@@ -83,17 +83,18 @@ class ServiceBusy(ApiError):
     headers: ClassVar[Mapping[str, str]] = {"Retry-After": "5"}
 
 
-class StageUnavailable(ApiError):
-    """A synth stage (planner, codegen) is missing from this build, so the job cannot run."""
+class JobLost(ApiError):
+    """A job's outcome is unknown: the server stopped abruptly while it ran (the job's problem)."""
 
     status = 503
-    title = "Not available in this build"
+    title = "Job lost"
 
 
-class ReplayUnavailable(StageUnavailable):
-    """No replay (``synth.replay``) in this build, so programs cannot be validated."""
+class JobCancelled(ApiError):
+    """A job was cancelled (``DELETE``) before it finished (the job's problem)."""
 
-    title = "Replay not available"
+    status = 409
+    title = "Job cancelled"
 
 
 class TimeBudgetExceeded(ApiError):
@@ -124,13 +125,13 @@ class WorkerFailed(RuntimeError):
 __all__ = [
     "ApiError",
     "InvalidRequest",
+    "JobCancelled",
+    "JobLost",
     "MemoryBudgetExceeded",
     "NotFound",
     "PayloadTooLarge",
-    "ReplayUnavailable",
     "RequestTimeout",
     "ServiceBusy",
-    "StageUnavailable",
     "TimeBudgetExceeded",
     "TooManyRequests",
     "Unauthorized",

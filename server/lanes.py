@@ -5,8 +5,9 @@ client (keyed by its peer address) holds at most ``per_client`` of them at once,
 most ``queue_per_client`` more jobs waiting (beyond that: :class:`TooManyRequests`, 429). When a
 slot frees, it goes to the waiting clients in round-robin order — the client served longest ago
 first, skipping clients already at their cap — so a client that floods the queue waits behind
-its own jobs, not in front of everyone else's. A job that gets no slot within its timeout is
-answered :class:`ServiceBusy` (503).
+its own jobs, not in front of everyone else's. A job (:mod:`server.jobs`) is queued when it is
+submitted (:meth:`Lanes.enqueue`, so the 429 is the submission's answer) and then waits as
+long as it takes; a caller that gives a timeout gets :class:`ServiceBusy` (503) after it.
 
 With ``per_client = capacity - 1`` (the default when there are at least two workers) one
 client's pathological requests leave a worker for everybody else. Distinct clients can still
@@ -49,23 +50,16 @@ class Lanes:
         """``(running, waiting)`` jobs of ``client``."""
         return self._running[client], len(self._waiting.get(client, ()))
 
-    @asynccontextmanager
-    async def slot(self, client: str, timeout: float) -> AsyncIterator[None]:
-        """Hold a slot for ``client`` for the body of the ``async with``.
+    def enqueue(self, client: str, *, check: bool = True) -> asyncio.Future[None]:
+        """Queue one job of ``client`` now; the future is done when the job holds a slot.
 
-        Waits at most ``timeout`` [s]; raises :class:`TooManyRequests` at once when ``client``
-        already has ``per_client + queue_per_client`` jobs, :class:`ServiceBusy` on timeout.
+        Raises :class:`TooManyRequests` at once when ``check`` and ``client`` already has
+        ``per_client + queue_per_client`` jobs (a job accepted before a restart is queued again
+        with ``check=False``). Pass the future to :meth:`slot`, or to :meth:`abandon`.
         """
-        await self._acquire(client, timeout)
-        try:
-            yield
-        finally:
-            self._release(client)
-
-    async def _acquire(self, client: str, timeout: float) -> None:
         running, waiting = self.held_by(client)
         allowed = self.per_client + self.queue_per_client
-        if running + waiting >= allowed:
+        if check and running + waiting >= allowed:
             raise TooManyRequests(
                 f"this client already has {running} job(s) running and {waiting} waiting; "
                 f"the server runs at most {self.per_client} and queues at most "
@@ -76,15 +70,42 @@ class Lanes:
         granted: asyncio.Future[None] = asyncio.get_running_loop().create_future()
         self._waiting.setdefault(client, deque()).append(granted)
         self._dispatch()
+        return granted
+
+    def abandon(self, client: str, granted: asyncio.Future[None]) -> None:
+        """Give up the queued job ``granted`` of ``client`` (its slot too, if it got one)."""
+        if granted.done() and not granted.cancelled():  # granted as the wait ended
+            self._release(client)
+        else:
+            granted.cancel()
+            self._forget(client, granted)
+
+    @asynccontextmanager
+    async def slot(
+        self, client: str, timeout: float | None, ticket: asyncio.Future[None] | None = None
+    ) -> AsyncIterator[None]:
+        """Hold a slot for ``client`` for the body of the ``async with``.
+
+        Waits at most ``timeout`` [s] (None: as long as it takes) for the job queued as
+        ``ticket`` (:meth:`enqueue`; default: queue it now). Raises :class:`TooManyRequests`
+        at once when ``client`` already has ``per_client + queue_per_client`` jobs,
+        :class:`ServiceBusy` on timeout.
+        """
+        await self._acquire(client, timeout, ticket)
+        try:
+            yield
+        finally:
+            self._release(client)
+
+    async def _acquire(
+        self, client: str, timeout: float | None, ticket: asyncio.Future[None] | None
+    ) -> None:
+        granted = ticket if ticket is not None else self.enqueue(client)
         try:
             async with asyncio.timeout(timeout):
                 await granted
         except BaseException as exc:
-            if granted.done() and not granted.cancelled():  # granted as the wait ended
-                self._release(client)
-            else:
-                granted.cancel()
-                self._forget(client, granted)
+            self.abandon(client, granted)
             if isinstance(exc, TimeoutError):
                 raise ServiceBusy(
                     f"no worker became free for this request within {timeout:g} s "

@@ -7,9 +7,9 @@ writes it, the same shape as ``synth plan --json``; these models pin down what t
 from __future__ import annotations
 
 from datetime import datetime
-from typing import Any
+from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, WithJsonSchema, model_validator
 
 
 class Problem(BaseModel):
@@ -42,14 +42,15 @@ class Problem(BaseModel):
 _PROBLEM_MEANINGS = {
     400: "the body could not be read as the endpoint's media type (e.g. JSON that is not UTF-8)",
     401: "a token is configured and the request lacks it",
-    404: "no such plan",
+    404: "no such plan or job",
     408: "the request body did not arrive within the server's body timeout",
     413: "the request body is over the server's limit",
     415: "the body's media type is not accepted",
     422: "the request or the task is invalid, or no program can be made for it",
     429: "this client already has as many jobs running and queued as the server allows",
     500: "an internal error (logged with the request id); never caused by the input alone",
-    503: "no worker became free within the time budget, or a stage is missing from this build",
+    503: "the server holds as many unfinished jobs as it may (SYNTH_MAX_JOBS), or no worker "
+    "became free in time",
     504: "the job ran past the time budget and was stopped",
 }
 
@@ -168,17 +169,150 @@ class ReplayIn(BaseModel):
 
 
 class HealthOut(BaseModel):
-    """Liveness and what this build can do."""
+    """Liveness: the database, the workers and the jobs."""
 
     status: str = Field(description="'ok', or 'degraded' when the database or workers are down")
     version: str
     database: str
-    workers: dict[str, int]
-    stages: dict[str, bool] = Field(description="planner, codegen, replay: present in this build")
+    workers: dict[str, int] = Field(
+        description="size, alive, idle (started and free), running, waiting"
+    )
+    jobs: dict[str, int] = Field(description="unfinished, running, queued (in this server)")
+
+
+JobState = Literal["queued", "running", "done", "failed", "lost", "cancelled"]
+
+
+class JobLinks(BaseModel):
+    """Where to find a job and, once a plan job is done, its plan and program."""
+
+    self_: str = Field(alias="self")
+    plan: str | None = Field(default=None, description="the plan (plan jobs, once done)")
+    program: str | None = Field(default=None, description="its AL program")
+
+    model_config = ConfigDict(populate_by_name=True)
+
+
+class JobOut(BaseModel):
+    """A job: a plan (with its proof) or a replay, run after the request that submitted it.
+
+    ``state`` is ``queued`` or ``running`` until it is final: ``done`` (``result``), ``failed``
+    (``problem``: the problem document the work raised, e.g. 422 no feasible strategy, 504 over
+    the time budget), ``lost`` (the server stopped abruptly while it ran) or ``cancelled``
+    (``DELETE``). Times are UTC.
+    """
+
+    model_config = ConfigDict(
+        json_schema_extra={
+            "example": {
+                "id": "0c5d3f8e9a7b4c2d1e6f8a9b0c1d2e3f",
+                "kind": "plan",
+                "state": "queued",
+                "created_at": "2026-11-22T03:35:57.795112Z",
+                "started_at": None,
+                "finished_at": None,
+                "attempts": 0,
+                "task": "seed_4_8",
+                "options": {"trials": 8, "seed": 0, "validate": True},
+                "plan_id": None,
+                "reused": None,
+                "result": None,
+                "problem": None,
+                "links": {"self": "/v1/jobs/0c5d3f8e9a7b4c2d1e6f8a9b0c1d2e3f"},
+            }
+        }
+    )
+
+    id: str
+    kind: Literal["plan", "replay"]
+    state: JobState
+    created_at: datetime
+    started_at: datetime | None = Field(description="when its last run started")
+    finished_at: datetime | None
+    attempts: int = Field(description="runs started (2 after a clean restart re-ran it)")
+    task: str | None = Field(description="the task's name")
+    options: dict[str, Any] = Field(description="the options it runs with (trials, seed, …)")
+    plan_id: str | None = Field(description="plan jobs, once done: the plan made or reused")
+    reused: bool | None = Field(
+        description="plan jobs, once done: true when an identical earlier submission's plan "
+        "was returned instead of planning again"
+    )
+    result: dict[str, Any] | None = Field(
+        description="done: a plan job's plan (as GET /v1/plans/{id}; null if deleted since), "
+        "a replay job's report (as `synth replay --json`)"
+    )
+    problem: Problem | None = Field(description="failed, lost or cancelled: why")
+    links: JobLinks
+
+
+class BatchTaskIn(BaseModel):
+    """One task of a batch: the spec and its planning options (the query of POST /v1/plans)."""
+
+    model_config = ConfigDict(extra="forbid", populate_by_name=True)
+
+    spec: dict[str, Any] | str = Field(description="task spec: a JSON object, or YAML text")
+    trials: int | None = Field(
+        default=None, ge=0, description="Monte Carlo trials (default: the server's)"
+    )
+    seed: int = Field(default=0, ge=0, le=2**32 - 1, description="random seed of the trials")
+    try_harder: bool = Field(default=False, description="planner: refine more candidates")
+    exhaustive: bool = Field(default=False, description="planner: refine every candidate")
+    validate_: bool = Field(
+        default=True, alias="validate", description="replay the program (false: skip)"
+    )
+
+
+class BatchIn(BaseModel):
+    """Many tasks in one request; each becomes its own plan job.
+
+    Items are checked one by one, so a bad item is answered with its own problem and does not
+    stop the others.
+    """
+
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "example": {
+                "tasks": [
+                    {"spec": "name: seed_4_8\nframes: [...]", "trials": 8},
+                    {"spec": {"name": "other", "frames": []}, "validate": False},
+                ]
+            }
+        },
+    )
+
+    tasks: list[Annotated[Any, WithJsonSchema(BatchTaskIn.model_json_schema())]] = Field(
+        min_length=1, description="the tasks, at most the server's SYNTH_MAX_BATCH"
+    )
+
+
+class BatchItemOut(BaseModel):
+    """The answer for one task of a batch: its job, or its problem."""
+
+    index: int = Field(description="position of the task in the request")
+    status: int = Field(description="202 queued, 201 done at once (reused), or a 4xx/503")
+    location: str | None = Field(description="the job's URL")
+    job: JobOut | None
+    problem: Problem | None
+
+
+class BatchOut(BaseModel):
+    """One answer per task, in request order."""
+
+    accepted: int
+    rejected: int
+    items: list[BatchItemOut]
 
 
 __all__ = [
+    "BatchIn",
+    "BatchItemOut",
+    "BatchOut",
+    "BatchTaskIn",
     "HealthOut",
+    "JobLinks",
+    "JobOut",
+    "JobState",
     "PlanLinks",
     "PlanOptionsOut",
     "PlanOut",

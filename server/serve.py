@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import copy
 import sys
 from collections.abc import Sequence
+from typing import Any
 
 from server.settings import settings_from_env
 
@@ -44,9 +46,20 @@ def serve(
             "it can submit work (set --token or SYNTH_TOKEN)",
             file=sys.stderr,
         )
-    config = uvicorn_config(create_app(settings), settings, host, port, log_level="info")
+    config = uvicorn_config(
+        create_app(settings), settings, host, port, log_level="info", log_config=_log_config()
+    )
     uvicorn.Server(config).run()
     return 0
+
+
+def _log_config() -> dict[str, Any]:
+    """The logging of uvicorn, plus the server's own loggers (jobs recovered, bugs) at INFO."""
+    from uvicorn.config import LOGGING_CONFIG
+
+    config = copy.deepcopy(LOGGING_CONFIG)
+    config["loggers"]["server"] = {"handlers": ["default"], "level": "INFO", "propagate": False}
+    return config
 
 
 def _check_database(url: str) -> str | None:

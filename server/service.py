@@ -1,9 +1,11 @@
 """The one place where the server calls synth: parse, plan, emit, replay, store.
 
-Routes call :class:`PlanService`; it runs every synth call as a job in a worker process
-(:mod:`server.workers`) under the time budget and stores results through
-:mod:`server.db`. The module-level ``*_job`` functions are those jobs: they run in the workers,
-take and return plain picklable values, and are the only functions that import synth's stages.
+Routes call :class:`PlanService`. It checks a submission at once (the task spec is parsed and
+validated in a thread of the server, so a bad spec is a 422 answer, not a failed job), then
+hands the work to the job manager (:mod:`server.jobs`), which runs it in a worker process
+(:mod:`server.workers`) under the time budget; results are stored through :mod:`server.db`.
+The module-level ``*_job`` functions are the workers' side: they take and return plain
+picklable values.
 """
 
 from __future__ import annotations
@@ -19,17 +21,18 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
 import synth
-from server.exceptions import NotFound, ReplayUnavailable, UnsupportedMediaType
+from server.exceptions import NotFound, UnsupportedMediaType
 from server.lanes import Lanes
 from server.modelpaths import confine_model_files
 from server.settings import Settings
-from server.workers import WorkerPool
+from server.workers import STARTUP_TIMEOUT, WorkerPool
 from synth.exceptions import SpecError
 from synth.models.spec import TaskSpec
 from synth.models.yamlread import YamlLimits
 
-if TYPE_CHECKING:  # the store is the server's; jobs in worker processes never load it
-    from server.db import PlanStore, StoredPlan
+if TYPE_CHECKING:  # the server's side only: worker processes never import the store or jobs
+    from server.db import PlanStore, StoredJob, StoredPlan
+    from server.jobs import Outcome
 
 SpecKind = Literal["yaml", "json"]
 
@@ -123,53 +126,32 @@ def content_hash(body: bytes, kind: SpecKind, options: dict[str, Any]) -> str:
     return digest.hexdigest()
 
 
-# -- the stages (imported lazily: some land after the server) --------------------------------
+# -- warm-up (each worker, once) -------------------------------------------------------------
 
 
-def _stage(module: str) -> Any | None:
-    try:
-        return importlib.import_module(module)
-    except ImportError:
-        return None
+WARM_MODULES = (
+    "synth.models.loader",
+    "synth.models.graph",
+    "synth.models.arm",
+    "synth.errors.estimate",
+    "synth.strategies.planner",
+    "synth.codegen.emitter",
+    "synth.replay",
+    "synth.replay.run",
+    "synth.al.parser",
+    "synth.pipeline",
+)
 
 
-def stages_available() -> dict[str, bool]:
-    """Which synth stages this build has (planner, codegen, replay)."""
-    return {
-        "planner": _stage("synth.strategies.planner") is not None,
-        "codegen": _stage("synth.codegen.emitter") is not None,
-        "replay": _replay_function() is not None,
-    }
+def warm_up() -> None:
+    """Import synth's heavy modules once, so a worker's first job does not pay for them."""
+    for module in WARM_MODULES:
+        importlib.import_module(module)
 
 
-def _replay_function() -> Callable[..., Any] | None:
-    """The replay entry point of ``synth.replay``, or None when this build has none."""
-    module = _stage("synth.replay")
-    return getattr(module, "replay_program", None) if module is not None else None
-
-
-def replay_not_available() -> None:
-    """Raise 503: this build cannot replay AL programs (``synth.replay`` has no entry point)."""
-    raise ReplayUnavailable(
-        "replay not available in this build: synth.replay has no replay entry point yet, so "
-        "programs cannot be validated; plan with validate=false to get an unvalidated program"
-    )
-
-
-def warm_up() -> dict[str, bool]:
-    """Import the heavy modules once per worker; return :func:`stages_available` for health."""
-    for module in (
-        "synth.models.loader",
-        "synth.models.graph",
-        "synth.models.arm",
-        "synth.errors.estimate",
-        "synth.strategies.planner",
-        "synth.codegen.emitter",
-        "synth.replay",
-        "synth.al.parser",
-    ):
-        _stage(module)
-    return stages_available()
+def warm_up_parser() -> None:
+    """Import the spec loader in the server, so the first submission is checked at once."""
+    importlib.import_module("synth.models.loader")
 
 
 # -- jobs (run in worker processes) ----------------------------------------------------------
@@ -179,15 +161,6 @@ def _spec_for_server(
     body: bytes | str | dict[str, Any], kind: SpecKind, model_dirs: tuple[str, ...]
 ) -> TaskSpec:
     return confine_model_files(parse_spec(body, kind), [Path(d) for d in model_dirs])
-
-
-def _replay(program: str, spec: TaskSpec, trials: int, seed: int) -> dict[str, Any]:
-    replay = _replay_function()
-    if replay is None:
-        replay_not_available()
-    assert replay is not None
-    report = replay(program, spec, trials=trials, seed=seed)
-    return dict(report.to_json())
 
 
 def plan_job(
@@ -202,13 +175,13 @@ def plan_job(
     spec = _spec_for_server(body, kind, model_dirs)
     from synth.pipeline import SynthesisOptions, synthesize
     from synth.replay.proof import ProofOptions
-    from synth.strategies.options import PlanOptions as PlannerOptions
+    from synth.strategies.options import PlanOptions
 
     trials = options["trials"] if options["validate"] else 0
     synthesis = synthesize(
         spec,
         SynthesisOptions(
-            plan=PlannerOptions(try_harder=options["try_harder"], exhaustive=options["exhaustive"]),
+            plan=PlanOptions(try_harder=options["try_harder"], exhaustive=options["exhaustive"]),
             # One worker: the job already runs in a worker process of the server's pool.
             proof=ProofOptions.for_task(spec, trials=trials, seed=options["seed"], workers=1),
         ),
@@ -233,18 +206,18 @@ def replay_job(
     model_dirs: tuple[str, ...],
 ) -> dict[str, Any]:
     """Replay ``program`` against the task in ``spec_body``: the replay report as JSON."""
-    if _replay_function() is None:
-        replay_not_available()
+    from synth.replay import replay
+
     spec = _spec_for_server(spec_body, kind, model_dirs)
-    return _replay(program, spec, trials, seed)
+    return dict(replay(program, spec, trials=trials, seed=seed).to_json())
 
 
 # -- orchestration (runs in the server) -------------------------------------------------------
 
 
 @dataclass(frozen=True)
-class PlanOptions:
-    """Options of one planning request.
+class PlanRequest:
+    """Options of one planning request (the planner's own: :class:`synth.strategies.PlanOptions`).
 
     ``trials``: Monte Carlo trials of the replay; ``seed``: its random seed; ``validate``:
     replay at all; ``try_harder`` and ``exhaustive`` are passed to the planner.
@@ -272,85 +245,134 @@ def _finite_json(value: Any) -> Any:
     return value
 
 
-class PlanService:
-    """Plans and replays for the routes: validation, budgets, de-duplication, storage.
+def _model_dirs(settings: Settings) -> tuple[str, ...]:
+    return tuple(str(d) for d in settings.model_dirs)
 
-    Every job first takes a slot of :attr:`lanes` for its client (:mod:`server.lanes`), then
-    runs in :attr:`pool`: it waits at most ``plan_timeout`` for a slot and then runs at most
-    ``plan_timeout``.
+
+def _kind_of(plan: StoredPlan) -> SpecKind:
+    return "json" if plan.spec_media_type == "json" else "yaml"
+
+
+class PlanService:
+    """Plans and replays for the routes: validation, jobs, de-duplication, storage.
+
+    A submission is checked at once (the spec parses and validates, its model files resolve,
+    the options are within bounds: else 4xx) and then becomes a job (:mod:`server.jobs`) that
+    runs in :attr:`pool` once its client's lane (:mod:`server.lanes`) has a slot, for at most
+    ``plan_timeout`` [s].
     """
 
-    def __init__(self, store: PlanStore, pool: WorkerPool, lanes: Lanes | None = None) -> None:
+    def __init__(
+        self, store: PlanStore, pool: WorkerPool, lanes: Lanes, settings: Settings
+    ) -> None:
         self.store = store
         self.pool = pool
-        self.lanes = lanes if lanes is not None else Lanes(pool.size, pool.size, 0)
+        self.lanes = lanes
+        from server.jobs import JobManager
 
-    async def run_job(
-        self, client: str, fn: Callable[..., Any], *args: Any, timeout: float, what: str
+        self.jobs = JobManager(
+            store, lanes, {"plan": self._run_plan, "replay": self._run_replay}, settings
+        )
+
+    # -- executors (the jobs' work, run by the job manager) -----------------------------------
+
+    async def _in_worker(
+        self, settings: Settings, fn: Callable[..., Any], *args: Any, what: str
     ) -> Any:
-        """``fn(*args)`` in a worker, once ``client`` holds a lane slot (module rule)."""
-        async with self.lanes.slot(client, timeout):
-            return await self.pool.run(fn, *args, timeout=timeout, what=what)
+        # The job holds a lane slot, so a worker is free unless one is being replaced (or a
+        # picture route holds it): wait for one as long as a worker takes to start.
+        return await self.pool.run(
+            fn, *args, timeout=settings.plan_timeout, wait=STARTUP_TIMEOUT, what=what
+        )
 
-    async def create_plan(
-        self,
-        body: bytes,
-        content_type: str | None,
-        options: PlanOptions,
-        settings: Settings,
-        client: str = "-",
-    ) -> tuple[StoredPlan, bool]:
-        """Plan the task in ``body``; return the stored plan and whether it is new.
-
-        An identical earlier submission (same body, kind and options) is returned as stored.
-        The new plan is committed before this returns.
-        """
+    async def _run_plan(self, job: StoredJob, settings: Settings) -> Outcome:
         from server.db import NewPlan
+        from server.jobs import Outcome
 
-        kind = spec_kind(content_type)
-        key = content_hash(body, kind, options.to_json())
-        twin = await asyncio.to_thread(self.store.by_hash, key)
-        if twin is not None:
-            return twin, False
-        outcome = await self.run_job(
-            client,
+        body, kind = job.payload["body"], job.payload["kind"]
+        outcome = await self._in_worker(
+            settings,
             plan_job,
-            body,
+            body.encode("utf-8"),
             kind,
-            options.to_json(),
-            tuple(str(d) for d in settings.model_dirs),
-            timeout=settings.plan_timeout,
+            job.options,
+            _model_dirs(settings),
             what="planning",
         )
         new = NewPlan(
-            content_hash=key,
+            content_hash=str(job.content_hash),
             task_name=outcome["task"],
-            spec_text=body.decode("utf-8"),
+            spec_text=body,
             spec_media_type=kind,
             spec=_finite_json(outcome["spec"]),
-            options=options.to_json(),
+            options=job.options,
             result=_finite_json(outcome["result"]),
             program=outcome["program"],
             validation=_finite_json(outcome["validation"]),
         )
-        return await asyncio.to_thread(self.store.add, new)
+        plan, created = await asyncio.to_thread(self.store.add, new)
+        return Outcome(plan_id=plan.id, result={"reused": not created})
 
-    async def get_plan(self, plan_id: str) -> StoredPlan:
-        """The stored plan ``plan_id``; :class:`NotFound` otherwise."""
-        plan = None
-        if len(plan_id) == 32 and all(c in "0123456789abcdef" for c in plan_id):
-            plan = await asyncio.to_thread(self.store.get, plan_id)
-        if plan is None:
-            raise NotFound(f"no plan with id {plan_id[:64]!r}")
-        return plan
+    async def _run_replay(self, job: StoredJob, settings: Settings) -> Outcome:
+        from server.jobs import Outcome
 
-    async def list_plans(
-        self, limit: int, cursor: int | None
-    ) -> tuple[list[StoredPlan], int | None]:
-        """A page of plans, newest first, and the cursor of the next page."""
-        return await asyncio.to_thread(self.store.page, limit, cursor)
+        payload = job.payload
+        report = await self._in_worker(
+            settings,
+            replay_job,
+            payload["program"],
+            payload["spec"],
+            payload["kind"],
+            job.options["trials"],
+            job.options["seed"],
+            _model_dirs(settings),
+            what="the replay",
+        )
+        return Outcome(result=dict(_finite_json(report)))
 
-    async def replay(
+    # -- submissions --------------------------------------------------------------------------
+
+    async def _checked_spec(
+        self, body: bytes | str | dict[str, Any], kind: SpecKind, settings: Settings
+    ) -> TaskSpec:
+        """The task in ``body``, validated now (422 at once, not a failed job)."""
+        return await asyncio.to_thread(_spec_for_server, body, kind, _model_dirs(settings))
+
+    async def submit_plan(
+        self,
+        body: bytes,
+        content_type: str | None,
+        options: PlanRequest,
+        settings: Settings,
+        client: str = "-",
+    ) -> StoredJob:
+        """A job that plans the task in ``body``; the spec is checked first (422 at once).
+
+        An identical earlier submission (same body, kind and options) is answered from the
+        store: the job is ``done`` at once, with ``reused`` in its result.
+        """
+        from server.db import NewJob
+        from server.jobs import Outcome
+
+        kind = spec_kind(content_type)
+        spec = await self._checked_spec(body, kind, settings)
+        key = content_hash(body, kind, options.to_json())
+        job = NewJob(
+            kind="plan",
+            client=client,
+            task_name=spec.name,
+            content_hash=key,
+            options=options.to_json(),
+            payload={"body": body.decode("utf-8"), "kind": kind},
+        )
+        twin = await asyncio.to_thread(self.store.by_hash, key)
+        if twin is not None:
+            return await self.jobs.record_done(
+                job, Outcome(plan_id=twin.id, result={"reused": True})
+            )
+        return await self.jobs.submit(job, settings)
+
+    async def submit_replay(
         self,
         program: str | None,
         spec: str | dict[str, Any] | None,
@@ -359,34 +381,85 @@ class PlanService:
         seed: int,
         settings: Settings,
         client: str = "-",
-    ) -> dict[str, Any]:
-        """Replay ``program`` (default: the stored plan's) against ``spec`` or the stored task."""
+    ) -> StoredJob:
+        """A job that replays ``program`` against ``spec``, or against a stored plan's task.
+
+        With ``plan_id`` the program defaults to the plan's. The plan must exist and the spec
+        validate (404, 422 at once).
+        """
+        from server.db import NewJob
+
         kind: SpecKind = "yaml"
-        spec_body: bytes | str | dict[str, Any]
+        spec_body: str | dict[str, Any]
         if plan_id is not None:
             plan = await self.get_plan(plan_id)
-            spec_body = plan.spec_text
-            kind = "json" if plan.spec_media_type == "json" else "yaml"
+            spec_body, kind = plan.spec_text, _kind_of(plan)
             program = plan.program if program is None else program
         else:
             assert spec is not None and program is not None  # the request schema ensures it
             spec_body = spec
-        report = await self.run_job(
-            client,
-            replay_job,
-            program,
-            spec_body,
-            kind,
-            trials,
-            seed,
-            tuple(str(d) for d in settings.model_dirs),
-            timeout=settings.plan_timeout,
-            what="the replay",
+        task = await self._checked_spec(spec_body, kind, settings)
+        job = NewJob(
+            kind="replay",
+            client=client,
+            task_name=task.name,
+            content_hash=None,
+            options={"trials": trials, "seed": seed, "plan_id": plan_id},
+            payload={"program": program, "spec": spec_body, "kind": kind},
         )
-        return dict(_finite_json(report))
+        return await self.jobs.submit(job, settings)
+
+    # -- jobs ---------------------------------------------------------------------------------
+
+    async def get_job(self, job_id: str, wait: float = 0.0) -> StoredJob:
+        """The job ``job_id`` once it is final or ``wait`` [s] have passed; 404 if unknown."""
+        if not _is_id(job_id):
+            raise NotFound(f"no job with id {job_id[:64]!r}")
+        await self.jobs.wait(job_id, wait)
+        job = await asyncio.to_thread(self.store.get_job, job_id)
+        if job is None:
+            raise NotFound(f"no job with id {job_id[:64]!r}")
+        return job
+
+    async def job_plan(self, job: StoredJob) -> StoredPlan | None:
+        """The plan a finished plan job made or reused (None: none, or deleted since)."""
+        if job.plan_id is None:
+            return None
+        return await asyncio.to_thread(self.store.get, job.plan_id)
+
+    async def delete_job(self, job_id: str) -> StoredJob | None:
+        """Cancel the job if unfinished (return it, cancelled), else delete it (None); 404."""
+        job = await self.get_job(job_id)
+        if job.finished:
+            await asyncio.to_thread(self.store.delete_job, job_id)
+            return None
+        await self.jobs.cancel(job_id)
+        return await self.get_job(job_id)
+
+    # -- plans --------------------------------------------------------------------------------
+
+    async def get_plan(self, plan_id: str) -> StoredPlan:
+        """The stored plan ``plan_id``; :class:`NotFound` otherwise."""
+        plan = None
+        if _is_id(plan_id):
+            plan = await asyncio.to_thread(self.store.get, plan_id)
+        if plan is None:
+            raise NotFound(f"no plan with id {plan_id[:64]!r}")
+        return plan
+
+    async def delete_plan(self, plan_id: str) -> None:
+        """Delete the stored plan ``plan_id``; :class:`NotFound` when there is none."""
+        if not (_is_id(plan_id) and await asyncio.to_thread(self.store.delete_plan, plan_id)):
+            raise NotFound(f"no plan with id {plan_id[:64]!r}")
+
+    async def list_plans(
+        self, limit: int, cursor: int | None
+    ) -> tuple[list[StoredPlan], int | None]:
+        """A page of plans, newest first, and the cursor of the next page."""
+        return await asyncio.to_thread(self.store.page, limit, cursor)
 
     async def health(self) -> dict[str, Any]:
-        """Database and worker state, and which stages this build has."""
+        """Database, worker and job state."""
         database = await asyncio.to_thread(self.store.ping)
         return {
             "status": "ok" if database and self.pool.alive > 0 else "degraded",
@@ -399,20 +472,28 @@ class PlanService:
                 "running": self.lanes.running,
                 "waiting": self.lanes.waiting,
             },
-            "stages": dict(self.pool.info),
+            "jobs": {
+                "unfinished": self.jobs.unfinished,
+                "running": self.lanes.running,
+                "queued": self.lanes.waiting,
+            },
         }
+
+
+def _is_id(text: str) -> bool:
+    """True for a public id: 32 lower-case hex digits (anything else is unknown: 404)."""
+    return len(text) == 32 and all(c in "0123456789abcdef" for c in text)
 
 
 __all__ = [
     "ACCEPTED_MEDIA_TYPES",
-    "PlanOptions",
+    "PlanRequest",
     "PlanService",
     "content_hash",
     "parse_spec",
     "plan_job",
     "replay_job",
-    "replay_not_available",
     "spec_kind",
-    "stages_available",
     "warm_up",
+    "warm_up_parser",
 ]

@@ -6,6 +6,19 @@ in one of ``size`` long-lived worker processes (with synth imported once); a job
 overruns is answered with :class:`~server.errors.TimeBudgetExceeded` and its worker is killed
 and replaced. The event loop never blocks: it waits on the worker's pipe with ``add_reader``.
 
+Why not a library pool: ``concurrent.futures``' ``ProcessPoolExecutor`` cannot stop a running call
+— a timed-out or cancelled job would keep its core — and killing one of its processes breaks the
+whole executor (``BrokenProcessPool`` for every queued job); ``max_tasks_per_child`` recycles
+workers but bounds nothing. pebble's ``ProcessPool`` does stop a task on timeout or cancel by
+terminating its worker, and an initializer could set the memory cap, but its workers are
+``multiprocessing`` children: forked from the threaded server (unsafe), or spawned/forkserver'd,
+which re-imports the server's ``__main__`` in every worker (a BrokenProcessPool in a script without
+a ``__main__`` guard); it cannot retire just the worker that hit ``MemoryError``; and it exposes no
+per-worker readiness, which ``/healthz`` (``idle``) and the jobs' wait for a worker use. This pool
+keeps those semantics in one place: fresh ``python -m server.workers`` interpreters, a budget that
+kills exactly the overrunning worker, cancellation that does the same (``DELETE`` of a running
+job), the address-space cap, and replacement after a crash or a ``MemoryError``.
+
 A job is a picklable top-level callable and its arguments. A :class:`~synth.exceptions.SynthError`
 raised in a worker is rebuilt in the server as the same class with the same fields, so the one
 error handler maps it; any other exception comes back as :class:`~server.errors.WorkerFailed`
@@ -95,11 +108,10 @@ def _worker_main(conn: Connection, warmup: str, memory_limit: int = 0) -> None:
     _die_with_parent()
     _limit_memory(memory_limit)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the server decides when workers stop
-    info: dict[str, Any] = {}
     if warmup:
         module, _, name = warmup.partition(":")
-        info = getattr(importlib.import_module(module), name)()
-    conn.send(("ready", os.getpid(), info))
+        getattr(importlib.import_module(module), name)()
+    conn.send(("ready", os.getpid()))
     while True:
         try:
             message = conn.recv()
@@ -113,7 +125,7 @@ def _worker_main(conn: Connection, warmup: str, memory_limit: int = 0) -> None:
             reply = ("ok", fn(*args))
         except SynthError as exc:
             reply = ("synth_error", *_pack_synth_error(exc))
-        except ApiError as exc:  # e.g. ReplayUnavailable: picklable as it is
+        except ApiError as exc:  # e.g. InvalidRequest: picklable as it is
             reply = ("api_error", exc)
         except MemoryError:
             reply = ("memory", traceback.format_exc())
@@ -137,16 +149,15 @@ class WorkerPool:
 
     Workers are fresh interpreters (``python -m server.workers FD WARMUP``) talking over a
     socket pair, so they never re-import the server's ``__main__``. ``warmup`` names a
-    ``module:function`` each worker calls once before its first job; its result (a dict) is
-    kept in :attr:`info`. ``memory_limit`` [bytes] caps each worker's address space (0: no
-    cap), so a job that tries to allocate without bound fails in its worker, not the host.
+    ``module:function`` each worker calls once before its first job (its imports).
+    ``memory_limit`` [bytes] caps each worker's address space (0: no cap), so a job that tries
+    to allocate without bound fails in its worker, not the host.
     """
 
     def __init__(self, size: int, warmup: str = "", memory_limit: int = 0) -> None:
         self.size = size
         self.warmup = warmup
         self.memory_limit = memory_limit
-        self.info: dict[str, Any] = {}
         self._free: asyncio.Queue[_Worker] = asyncio.Queue()
         self._all: set[_Worker] = set()
         self._tasks: set[asyncio.Task[None]] = set()
@@ -193,7 +204,6 @@ class WorkerPool:
         except (EOFError, OSError):
             message = None
         if isinstance(message, tuple) and message[:1] == ("ready",):
-            self.info = dict(message[2])
             self._failed_starts = 0
             if self._closed:
                 self._stop(worker)
@@ -206,6 +216,14 @@ class WorkerPool:
         self._discard(worker)
         await asyncio.sleep(delay)
         self._spawn()
+
+    def stop_replacing(self) -> None:
+        """From now on a stopped worker is not replaced (the first step of shutting down).
+
+        Jobs still running keep their workers; cancelling them (``close`` of the job manager)
+        then stops those workers without starting new ones.
+        """
+        self._closed = True
 
     async def close(self) -> None:
         """Stop every worker (politely, then by force)."""
@@ -273,22 +291,34 @@ class WorkerPool:
         finally:
             loop.remove_reader(fd)
 
-    async def run(self, fn: Callable[..., Any], *args: Any, timeout: float, what: str) -> Any:
-        """``fn(*args)`` in a worker; waits at most ``timeout`` [s] for a worker plus the job.
+    async def run(
+        self,
+        fn: Callable[..., Any],
+        *args: Any,
+        timeout: float,
+        what: str,
+        wait: float | None = None,
+    ) -> Any:
+        """``fn(*args)`` in a worker, within ``timeout`` [s].
 
+        With ``wait`` None the budget covers the wait for a free worker plus the job; otherwise
+        the job waits at most ``wait`` [s] for a worker and then runs at most ``timeout`` [s].
         ``what`` names the job in messages (``"planning"``). Raises :class:`ServiceBusy` when no
         worker frees up in time, :class:`TimeBudgetExceeded` when the job overruns (its worker is
-        killed and replaced), the job's :class:`SynthError`, or :class:`WorkerFailed`.
+        killed and replaced), the job's :class:`SynthError`, or :class:`WorkerFailed`. A
+        cancelled call kills its worker (and replaces it unless the pool is shutting down).
         """
-        deadline = time.monotonic() + timeout
+        patience = timeout if wait is None else wait
+        asked = time.monotonic()
         try:
-            worker = await asyncio.wait_for(self._free.get(), timeout)
+            worker = await asyncio.wait_for(self._free.get(), patience)
         except TimeoutError:
             raise ServiceBusy(
-                f"no worker became free within {timeout:g} s ({self.size} workers, all busy "
+                f"no worker became free within {patience:g} s ({self.size} workers, all busy "
                 "or starting); retry later"
             ) from None
-        remaining = max(0.0, deadline - time.monotonic())
+        waited = time.monotonic() - asked
+        remaining = timeout if wait is not None else max(0.0, timeout - waited)
         finished = False
         try:
             worker.conn.send((fn, args))

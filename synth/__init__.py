@@ -39,7 +39,7 @@ _API: dict[str, str] = {
     "PlanResult": "synth.strategies.records",
     "PinInHoleStrategy": "synth.strategies.records",
     "Rejection": "synth.strategies.records",
-    "believed_graph": "synth.errors.locate",
+    "believed_graph": "synth.models.believed",
     "emit_program": "synth.codegen.emitter",
     "ProofOptions": "synth.replay.proof",
     "Proof": "synth.replay.proof",
@@ -84,8 +84,8 @@ if TYPE_CHECKING:
     from typing import Any
 
     from synth.codegen.emitter import emit_program
-    from synth.errors.locate import believed_graph
     from synth.exceptions import NoStrategyError, SpecError, SynthError
+    from synth.models.believed import believed_graph
     from synth.models.loader import load_task
     from synth.models.spec import TaskSpec
     from synth.pipeline import (

@@ -54,10 +54,6 @@ class FrameLookupError(SynthError):
         super().__init__(f"unknown frame or feature {name!r}; known: {shown}")
 
 
-class InfeasibleConstraintsError(SynthError):
-    """An uncertainty block's constraints admit no parameter values at all."""
-
-
 class EstimationError(SynthError):
     """An error bound could not be computed (e.g. the LP solver failed)."""
 

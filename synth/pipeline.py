@@ -3,7 +3,7 @@
 :func:`synthesize` is what ``synth plan``, the HTTP service, ``scripts/regen_golden.py``, the
 benchmarks and the end-to-end tests call; none of them composes the stages itself.
 
-1. The believed graph (:func:`~synth.errors.locate.believed_graph`): contact-located objects
+1. The believed graph (:func:`~synth.models.believed.believed_graph`): contact-located objects
    where their contacts put them — the world the planner plans in and the emitter declares
    (the replay draws their true poses from the contacts themselves).
 2. Best-first planning (:func:`~synth.strategies.planner.plan_task`, seed §4.2–4.6).
@@ -38,8 +38,8 @@ from numpy.typing import NDArray
 
 from synth.codegen.emitter import emit_program
 from synth.codegen.sequence import SequenceStep, emit_sequence
-from synth.errors.locate import believed_graph
 from synth.exceptions import NoStrategyError
+from synth.models.believed import believed_graph
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
 from synth.models.spec import TaskSpec

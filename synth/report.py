@@ -19,6 +19,8 @@ from synth.strategies.records import Destination, PinInHoleStrategy, PlanResult
 
 if TYPE_CHECKING:
     from synth.replay.proof import Proof
+    from synth.replay.report import ReplayReport
+    from synth.replay.run import TrialRecord
     from synth.strategies.sequence import SequencePlan
 
 _ROWS = (
@@ -445,3 +447,56 @@ def sequence_summary(
         lines += ["", f"Proof: {proof.summary()}"]
     text = "\n".join(lines)
     return text if verbose else strip_seed_references(text)
+
+
+def _seconds(value: float | None) -> str:
+    return "-" if value is None else f"{value:.2f} s"
+
+
+def replay_summary(report: ReplayReport) -> str:
+    """The report as text: the nominal run, its violations, and the Monte Carlo summary."""
+    n = report.nominal
+    lines = [f"replay {report.program} on task {report.task}"]
+    where = f" (line {n.line})" if n.line is not None else ""
+    lines.append(
+        f"nominal: {n.outcome}{where}: {n.message}; {_seconds(n.time)}, {n.statements} statements"
+    )
+    for v in n.violations:
+        lines.append(f"  violation: {v.kind} at line {v.line}: {v.detail}")
+    mc = report.monte_carlo
+    if mc.trials:
+        lo, hi = mc.interval()
+        rate = mc.success_rate or 0.0
+        counts = ", ".join(f"{k} {v}" for k, v in mc.outcomes.items())
+        lines.append(
+            f"Monte Carlo: {mc.trials} trials (seed {mc.seed}): success {100 * rate:.1f}% "
+            f"(95% Wilson interval {100 * lo:.1f}–{100 * hi:.1f}%)"
+        )
+        lines.append(f"  outcomes: {counts}")
+        lines.append(f"  time: mean {_seconds(mc.time_mean)}, p95 {_seconds(mc.time_p95)}")
+    else:
+        lines.append("Monte Carlo: no trials")
+    if report.interrupted:
+        lines.append(
+            f"  interrupted: {mc.trials} of {report.planned} trials done (Ctrl-C); "
+            "the figures above are over those"
+        )
+    return "\n".join(lines)
+
+
+def trial_text(record: TrialRecord) -> str:
+    """A trial as text: outcome, AL line, message, time, and the errors it sampled."""
+    run = record.run
+    where = f" at line {run.line}" if run.line is not None else ""
+    lines = [f"trial {record.index}: {run.outcome}{where}: {run.message}; {run.time:.2f} s"]
+    for v in run.violations:
+        lines.append(f"  violation: {v.kind} at line {v.line}: {v.detail}")
+    for frame, values in record.errors.items():
+        parts = ", ".join(
+            f"{name} {value * 100:+.4f} cm"
+            if name in ("x", "y", "z")
+            else f"{name} {math.degrees(value):+.4f}°"
+            for name, value in values.items()
+        )
+        lines.append(f"  {frame}: {parts}")
+    return "\n".join(lines)

@@ -8,13 +8,26 @@ from __future__ import annotations
 import math
 import re
 from functools import cache
-from typing import Any, Literal
+from typing import Any, Final, Literal
 
 import pint
 
 from synth.exceptions import UnitError
 
 Dimension = Literal["length", "angle", "force", "mass", "time", "torque", "dimensionless"]
+
+# The units synth's own code and tests write numbers in, in SI. The one place they are defined;
+# tests/test_units.py checks each against pint's conversion.
+MM: Final = 0.001
+"""[m] One millimetre."""
+CM: Final = 0.01
+"""[m] One centimetre, AL's bare length unit."""
+INCH: Final = 0.0254
+"""[m] One inch (exact by definition)."""
+DEG: Final = math.pi / 180.0
+"""[rad] One degree."""
+OZ: Final = 0.028349523125 * 9.80665
+"""[N] One ounce-force: the avoirdupois ounce (exact) under standard gravity, AL's force unit."""
 
 _SI_UNIT: dict[Dimension, str] = {
     "length": "m",

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
-import importlib.util
+import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
+import httpx
 from fastapi import FastAPI
 from fastapi.testclient import TestClient
 
@@ -16,24 +18,7 @@ from server.settings import Settings, get_settings
 ROOT = Path(__file__).resolve().parents[1]
 SEED = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
 YAML = {"Content-Type": "application/yaml"}
-
-
-def have(module: str) -> bool:
-    """True when ``module`` can be imported (a stage that has landed)."""
-    try:
-        return importlib.util.find_spec(module) is not None
-    except ModuleNotFoundError:
-        return False
-
-
-HAVE_PLANNER = have("synth.strategies.planner") and have("synth.codegen.emitter")
-
-
-def have_replay() -> bool:
-    """True when synth.replay exposes the entry point the server calls."""
-    from server.service import stages_available
-
-    return stages_available()["replay"]
+FINAL = frozenset({"done", "failed", "lost", "cancelled"})
 
 
 @contextmanager
@@ -54,3 +39,41 @@ def overridden(app: FastAPI, **changes: object) -> Iterator[Settings]:
         yield changed
     finally:
         app.dependency_overrides[get_settings] = before
+
+
+def finished(
+    client: TestClient | httpx.Client, submitted: httpx.Response, timeout: float = 300.0
+) -> dict[str, Any]:
+    """The job of a submission (202, 201) or a read of it (200), long-polled until final."""
+    assert submitted.status_code in (200, 201, 202), submitted.text
+    job: dict[str, Any] = submitted.json()
+    location = job["links"]["self"]
+    assert location == f"/v1/jobs/{job['id']}"
+    if submitted.status_code != 200:  # a submission names its job
+        assert submitted.headers["location"] == location
+    deadline = time.monotonic() + timeout
+    while job["state"] not in FINAL:
+        assert time.monotonic() < deadline, f"job still {job['state']} after {timeout:g} s"
+        answer = client.get(f"{location}?wait=10")
+        assert answer.status_code == 200, answer.text
+        job = answer.json()
+    return job
+
+
+def done(client: TestClient | httpx.Client, submitted: httpx.Response) -> dict[str, Any]:
+    """The result of a submitted job that must succeed (a plan, or a replay report)."""
+    job = finished(client, submitted)
+    assert job["state"] == "done", job["problem"]
+    result = job["result"]
+    assert isinstance(result, dict)
+    return result
+
+
+def failed(client: TestClient | httpx.Client, submitted: httpx.Response, status: int) -> dict:
+    """The problem of a submitted job that must fail with ``status``."""
+    job = finished(client, submitted)
+    assert job["state"] == "failed", job
+    problem = job["problem"]
+    assert problem["status"] == status, problem
+    assert problem["title"] and problem["detail"] and problem["type"]
+    return dict(problem)

@@ -1,4 +1,4 @@
-"""AL inputs that once crashed or ran for hours (issue 19): depth, huge literals, budgets."""
+"""AL inputs that once crashed or ran for hours: depth, huge literals, budgets."""
 
 from __future__ import annotations
 

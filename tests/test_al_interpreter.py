@@ -1,4 +1,4 @@
-"""AL values, interpreter, machine protocol and world binding (issue 6, items 2 and 5).
+"""AL values, interpreter, machine protocol and world binding.
 
 Oracles are independent of the code under test: frames composed by hand (rotation matrices
 written out, translations added in centimetres), the seed's numbers (design.md: T_wp, T_wb,
@@ -18,7 +18,6 @@ import pytest
 
 from synth.al import ast
 from synth.al import values as V
-from synth.al.binding import bind_world, preamble
 from synth.al.interpreter import Interpreter, RunResult
 from synth.al.machine import (
     DurationConstraint,
@@ -31,14 +30,14 @@ from synth.al.machine import (
     OpeningMonitor,
 )
 from synth.al.parser import parse_program
+from synth.codegen.binding import bind_world, preamble
 from synth.exceptions import ALRuntimeError, SynthError
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
+from synth.units import CM, INCH
 
 ROOT = Path(__file__).parent.parent
 DATA = Path(__file__).parent / "data" / "al"
-CM = 0.01
-INCH = 0.0254
 OZ_N = 4.4482216152605 / 16  # 1 oz-force = 1/16 lbf [N]
 
 
@@ -100,7 +99,7 @@ def ev(text: str, machine: Machine | None = None) -> V.Value:
     return value
 
 
-def sv(value: V.Value | None) -> tuple[float, V.Dimension]:
+def sv(value: V.Value | None) -> tuple[float, V.Exponents]:
     """A scalar as (SI value, dimension), for comparisons with pytest.approx."""
     assert isinstance(value, V.Scalar), value
     return value.value, value.dim

@@ -1,4 +1,4 @@
-"""AL parser, AST and printer (issue 6, part 1).
+"""AL parser, AST and printer.
 
 Oracles: the seed's own programs (tests/data/al, normalised; seed line numbers in each file's
 header), hand-derived trees for the constructs the seed-AL notes single out, exact error

@@ -15,8 +15,8 @@ import trimesh
 from synth.exceptions import ArmModelError
 from synth.models.arm import CollisionScene, HeldObject, build_stanford_arm, grasp_contacts
 from synth.models.spec import HandSpec
+from synth.units import CM
 
-CM = 0.01
 HAND = HandSpec()
 DOWN = pin.utils.rotate("y", math.pi)  # hand z (approach) pointing down, as BPARK (L2578)
 

@@ -18,8 +18,7 @@ from synth.models.arm import (
     rank_solutions,
 )
 from synth.models.spec import HandSpec
-
-DEG = math.pi / 180
+from synth.units import DEG
 
 
 @pytest.fixture(scope="module")

@@ -18,7 +18,6 @@ import trimesh
 from pydantic import ValidationError
 
 from synth.cli import main
-from synth.errors.locate import believed_graph
 from synth.exceptions import ArmModelError, SpecError
 from synth.models.arm import (
     CollisionScene,
@@ -35,6 +34,7 @@ from synth.models.arm import (
 )
 from synth.models.arm.rating import SeedGraspRating, WorstDexterityRating, characteristic_length
 from synth.models.arm.ur import URInverse
+from synth.models.believed import believed_graph
 from synth.models.catalog import BUILTIN_ARMS, ROBOTS_EXTRA
 from synth.models.graph import pose_to_se3
 from synth.models.loader import load_task

@@ -236,3 +236,24 @@ def test_ur5_mesh_distances_bounded_by_hulls_and_swept_check():
     result = swept_segment(scene, q0, q1)
     dense = min(scene.distances(q0 + t * (q1 - q0)).min() for t in np.linspace(0, 1, 201))
     assert result.free and dense > 0.01 and result.checks < 100
+
+
+@needs_ur5
+def test_pinocchio_reads_the_srdf_pairs_the_file_lists():
+    # Independent reading: every <disable_collisions> element of ur5.srdf, by the standard
+    # library's XML parser; Pinocchio's reading must hold exactly those between links on
+    # different joints (pairs on one joint are adjacent and never paired).
+    import xml.etree.ElementTree as ET
+
+    assert ROBOTS is not None
+    srdf = ROBOTS / "ur_description" / "srdf" / "ur5.srdf"
+    listed = {
+        frozenset((e.attrib["link1"], e.attrib["link2"]))
+        for e in ET.parse(srdf).getroot().iter("disable_collisions")
+    }
+    arm = load_arm(ur5_spec())
+    joint_of = {b.link: b.joint for b in arm.bodies}
+    apart = {p for p in listed if len({joint_of.get(link) for link in p}) == 2}
+    assert arm.disabled_pairs == apart and len(apart) >= 8
+    with pytest.raises(ArmModelError, match="SRDF file not found"):
+        load_arm(ur5_spec().model_copy(update={"srdf": "nosuch.srdf"}))

@@ -15,7 +15,7 @@ import pytest
 
 from synth.al.parser import parse_program
 from synth.cli import EXIT_INTERNAL, EXIT_REPLAY_FAILED, EXIT_USAGE, main
-from synth.replay.cli_command import ProgressBar
+from synth.progress import ProgressBar
 from synth.report import strip_seed_references
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -75,14 +75,15 @@ def test_replay_from_stdin_names_stdin_in_errors(
 def test_progress_shows_rate_and_eta() -> None:
     now = [100.0]
     stream = io.StringIO()
-    bar = ProgressBar(stream, width=10, label="proof", clock=lambda: now[0])
-    assert "trials/s" not in bar.line(0, 100)  # no rate before the first trial
+    bar = ProgressBar(stream, width=60, label="proof", clock=lambda: now[0])
+    assert "?trial/s" in bar.line(0, 100)  # no rate before the first trial
     now[0] += 20.0
-    bar(40, 100)  # 2 trials/s, 60 left: 30 s
-    assert stream.getvalue() == "\rproof [####......] 40/100 trials 0:20, 2 trials/s, ETA 0:30"
+    bar(40, 100)  # 40 in 20 s: 2 trials/s; 60 left: 30 s
+    assert stream.getvalue().startswith("\rproof:  40%|")
+    assert stream.getvalue().endswith("| 40/100 [00:20<00:30,  2.00trial/s]")
     now[0] += 10.0
-    bar(50, 100)  # 50 in 30 s: 1.67 trials/s, 50 left: 30 s
-    assert stream.getvalue().endswith("50/100 trials 0:30, 1.67 trials/s, ETA 0:30")
+    bar(50, 100)  # 50 in 30 s: 1.67 trials/s; 50 left: 30 s
+    assert stream.getvalue().rstrip().endswith("| 50/100 [00:30<00:30,  1.67trial/s]")
     bar.close()
     assert stream.getvalue().endswith("\n")
 

@@ -1,4 +1,4 @@
-"""AL code generation (issue 5): golden files, the seed's listings, parsing, running.
+"""AL code generation: golden files, the seed's listings, parsing, running.
 
 Oracles: the seed's own generated programs (seeds/000_1457622cbb9a2614.txt L2715–2781 and
 L2804–2844, normalised in tests/data/al/), our parser and printer, and the AL interpreter on a
@@ -15,6 +15,7 @@ import subprocess
 import sys
 from collections.abc import Callable, Sequence
 from dataclasses import fields, replace
+from functools import cache
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -25,24 +26,24 @@ import pytest
 
 from synth.al import ast
 from synth.al import values as V
-from synth.al.binding import bind_world
 from synth.al.interpreter import HAND_NAMES, Interpreter
 from synth.al.machine import IdealMachine, MachineCommand
 from synth.al.names import UNITS
 from synth.al.parser import parse_program
 from synth.al.printer import format_program
+from synth.codegen.binding import bind_world
 from synth.codegen.emitter import ALEmitter, emit_program, emitter_for, languages
 from synth.exceptions import CodegenError
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
 from synth.strategies.records import Destination, PinInHoleStrategy
+from synth.units import CM
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data"
 GOLDEN = ROOT / "fixtures" / "golden"
 TASKS = ("seed_4_8", "seed_4_8_tap")
 SEED_LISTING = {"seed_4_8": "seed_4_8_search.al", "seed_4_8_tap": "seed_4_8_tap.al"}
-CM = 0.01
 
 
 def _load(name: str, path: Path) -> ModuleType:
@@ -55,6 +56,13 @@ def _load(name: str, path: Path) -> ModuleType:
 
 REGEN = _load("regen_golden", ROOT / "scripts" / "regen_golden.py")
 SEED = _load("seed_strategies", DATA / "seed_strategies.py")
+
+
+@cache
+def golden_strategy(task: str) -> tuple[PinInHoleStrategy, AttributeGraph]:
+    """The strategy and believed graph the golden program of ``task`` was emitted from."""
+    synthesis = REGEN.golden_synthesis(task)
+    return synthesis.strategy, synthesis.graph
 
 
 def graph_of(task: str) -> AttributeGraph:
@@ -78,15 +86,8 @@ def emitted(task: str, **kwargs: Any) -> str:
 def test_golden_file_byte_for_byte(task: str) -> None:
     path = GOLDEN / f"{task}.al"
     expected = path.read_bytes()
-    actual = REGEN.golden_program(task, REGEN.recorded_source()).encode("utf-8")
+    actual = REGEN.golden_program(task).encode("utf-8")
     assert actual == expected, f"{path} is out of date: run python scripts/regen_golden.py"
-
-
-@pytest.mark.parametrize("task", TASKS)
-def test_golden_file_from_the_seed_records_is_their_program(task: str) -> None:
-    if REGEN.recorded_source() != "seed":
-        pytest.skip("the golden files are the planner's programs")
-    assert (GOLDEN / f"{task}.al").read_text(encoding="utf-8") == emitted(task)
 
 
 def test_regen_script_check_mode_passes() -> None:
@@ -180,7 +181,7 @@ def seed_faithful(task: str) -> str:
     The golden files search on past a point where nothing is felt (records.OffSurface); the
     seed's listing aborts there (L2762). Everything else must be the listing's.
     """
-    strategy, graph = REGEN.golden_strategy(task, REGEN.recorded_source())
+    strategy, graph = golden_strategy(task)
     if strategy.search is not None:
         strategy = replace(strategy, search=replace(strategy.search, off_surface="abort"))
     return emit_program(strategy, graph)
@@ -217,7 +218,7 @@ def test_golden_has_the_seed_listings_statements_in_order(task: str) -> None:
     # source wrote the golden file (with the seed's own search ending, above), once the via
     # points that bound the approach's path bow (synth.strategies.bow) are left out: the
     # seed's single VIA is the approach point.
-    strategy, graph = REGEN.golden_strategy(task, REGEN.recorded_source())
+    strategy, graph = golden_strategy(task)
     assert strategy.approach_vias, "the golden approach runs through vias along the axis"
     if strategy.search is not None:
         strategy = replace(strategy, search=replace(strategy.search, off_surface="abort"))
@@ -414,7 +415,7 @@ def fraction(
 def test_golden_programs_seat_the_pin_in_the_nominal_world(task: str) -> None:
     # Whatever wrote them: the golden files run, the tap (if any) touches the surface where
     # the record believes it is, and the first attempt seats the pin at d_f.
-    strategy, graph = REGEN.golden_strategy(task, REGEN.recorded_source())
+    strategy, graph = golden_strategy(task)
     seat = fraction(
         strategy.approach, strategy.destination, strategy.target, strategy.approach_vias
     )
@@ -438,7 +439,7 @@ def test_golden_search_backs_out_of_a_point_where_nothing_is_felt() -> None:
     # First attempt lands on the surface; the first search point feels nothing (the pin went
     # beside the box to the move's target); the second seats. The program must back the pin
     # out along the hole axis before moving on, and finish with the pin seated.
-    strategy, graph = REGEN.golden_strategy("seed_4_8", REGEN.recorded_source())
+    strategy, graph = golden_strategy("seed_4_8")
     assert strategy.search is not None and strategy.search.off_surface == "retract"
     ends = (strategy.approach, strategy.target)
     surface = fraction(ends[0], 0.0, ends[1], strategy.approach_vias)
@@ -465,7 +466,7 @@ def test_golden_search_backs_out_of_a_point_where_nothing_is_felt() -> None:
 
 @pytest.mark.parametrize("task", TASKS)
 def test_golden_programs_replay_successfully_in_the_nominal_world(task: str) -> None:
-    # Issue 5: every emitted program parses and replays in the nominal world (the referee).
+    # Every emitted program parses and replays in the nominal world (the referee).
     from synth.replay import replay
 
     report = replay(
@@ -487,19 +488,21 @@ def test_stand_alone_file_runs_without_a_binding() -> None:
 # Determinism and the emitter interface
 
 
-def test_output_is_deterministic_within_a_process() -> None:
-    assert emitted("seed_4_8") == emitted("seed_4_8")
-    assert emitted("seed_4_8_tap", preamble=True) == emitted("seed_4_8_tap", preamble=True)
-
-
 def test_output_is_deterministic_across_hash_seeds() -> None:
-    script = str(ROOT / "scripts" / "regen_golden.py")
+    # Set iteration follows the hash seed: two processes with different seeds must emit the
+    # seed's hand-built records (tests/data/seed_strategies.py) byte for byte alike, and alike
+    # this process's emission.
+    records = str(DATA / "seed_strategies.py")
     code = (
         "import importlib.util, sys\n"
-        f"spec = importlib.util.spec_from_file_location('r', {script!r})\n"
-        "r = importlib.util.module_from_spec(spec); spec.loader.exec_module(r)\n"
-        # the seed-record tasks this test emits (the script's list also holds planner-only ones)
-        f"sys.stdout.write(''.join(r.golden_program(t, 'seed') for t in {tuple(TASKS)!r}))\n"
+        "from synth.codegen.emitter import emit_program\n"
+        "from synth.models.graph import AttributeGraph\n"
+        "from synth.models.loader import load_task\n"
+        f"spec = importlib.util.spec_from_file_location('s', {records!r})\n"
+        "s = importlib.util.module_from_spec(spec); spec.loader.exec_module(s)\n"
+        f"tasks = {str(ROOT / 'fixtures' / 'tasks')!r}\n"
+        "sys.stdout.write(''.join(emit_program(s.STRATEGIES[t](), "
+        f"AttributeGraph(load_task(f'{{tasks}}/{{t}}.yaml'))) for t in {tuple(TASKS)!r}))\n"
     )
     outputs = set()
     for seed in ("0", "12345"):

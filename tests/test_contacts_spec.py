@@ -10,6 +10,7 @@ import textwrap
 
 import numpy as np
 import pytest
+from _paths import BOX_FIXTURE_TASK
 
 from synth.errors.locate import locate_objects
 from synth.exceptions import SpecError
@@ -17,9 +18,9 @@ from synth.models.contacts import ContactSpec
 from synth.models.features import box_features, fixture_features, object_vertices
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task, parse_task
+from synth.units import CM
 
-CM = 0.01
-FIXTURE = "fixtures/tasks/box_in_fixture.yaml"
+FIXTURE = BOX_FIXTURE_TASK
 
 BASE = textwrap.dedent(
     """\

@@ -177,3 +177,69 @@ def test_huge_rotations_are_refused() -> None:
     with pytest.raises(EstimationError, match="too large"):
         estimate_errors(chain_between(graph, "world", "hole"))
     assert math.isfinite(rotation_remainder(2, math.pi).max())
+
+
+def test_the_remainder_covers_float64_rounding_of_the_stored_model() -> None:
+    # Exact rational arithmetic (fractions) on the stored float inputs: the product's true value
+    # X(v) = (A₀ + Σ v_i A_i)(B₀ + Σ v_i B_i) minus its stored first-order model must lie within
+    # the stored remainder, rounding included. With constant factors the first-order part is
+    # exact algebra, so all of the gap is rounding: an unpadded remainder (0) fails here.
+    from fractions import Fraction
+
+    rng = np.random.default_rng(11)
+    magnitude = np.array([0.01, 0.02])
+
+    def model(scale: float) -> TaylorModel:
+        value = rng.uniform(-scale, scale, (3, 3)) / 3.0
+        linear = rng.uniform(-1.0, 1.0, (2, 3, 3)) / 7.0
+        return TaylorModel(value, linear, np.zeros((3, 3)), magnitude)
+
+    def exact(m: np.ndarray) -> list[list[Fraction]]:
+        return [[Fraction(float(x)) for x in row] for row in m]
+
+    def matmul(a: list[list[Fraction]], b: list[list[Fraction]]) -> list[list[Fraction]]:
+        return [[sum(a[i][k] * b[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
+
+    for scale in (1.0, 1e3):  # 1e3: a metre-scale lever arm in millimetre-scale errors
+        a = TaylorModel(model(scale).value, np.zeros((2, 3, 3)), np.zeros((3, 3)), magnitude)
+        b = TaylorModel(model(scale).value, np.zeros((2, 3, 3)), np.zeros((3, 3)), magnitude)
+        c = a @ b
+        truth = matmul(exact(a.value), exact(b.value))
+        gap = np.array(
+            [
+                [abs(float(truth[i][j] - Fraction(float(c.value[i, j])))) for j in range(3)]
+                for i in range(3)
+            ]
+        )
+        assert np.all(gap <= c.remainder) and gap.max() > 0  # rounding happened, and is covered
+        # with linear parts: sampled corners of the box, exactly
+        a, b = model(scale), model(scale)
+        c = a @ b
+        for v in ([0.01, 0.02], [-0.01, 0.02], [0.01, -0.02], [0.0, 0.0]):
+            fv = [Fraction(x) for x in v]
+            xa = [
+                [
+                    exact(a.value)[i][j] + sum(fv[n] * exact(a.linear[n])[i][j] for n in range(2))
+                    for j in range(3)
+                ]
+                for i in range(3)
+            ]
+            xb = [
+                [
+                    exact(b.value)[i][j] + sum(fv[n] * exact(b.linear[n])[i][j] for n in range(2))
+                    for j in range(3)
+                ]
+                for i in range(3)
+            ]
+            truth = matmul(xa, xb)
+            stored = [
+                [
+                    exact(c.value)[i][j] + sum(fv[n] * exact(c.linear[n])[i][j] for n in range(2))
+                    for j in range(3)
+                ]
+                for i in range(3)
+            ]
+            gap = np.array(
+                [[abs(float(truth[i][j] - stored[i][j])) for j in range(3)] for i in range(3)]
+            )
+            assert np.all(gap <= c.remainder)

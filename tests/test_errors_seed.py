@@ -10,16 +10,16 @@ import math
 import numpy as np
 import pinocchio as pin
 import pytest
+from _paths import DATA, TASKS
 
 from synth.errors.bounds import build_error_lp, closed_form_bound, solve_error_lp
 from synth.errors.chain import ErrorChain, Fixed, chain_between
 from synth.errors.estimate import RelationModel, estimate_errors
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
+from synth.units import CM
 
-FIXTURES = "fixtures/tasks"
-CM = 0.01
-IN = 0.0254
+FIXTURES = TASKS
 
 
 @pytest.fixture(scope="module")
@@ -30,7 +30,7 @@ def screw() -> tuple[AttributeGraph, ErrorChain]:
 
 @pytest.fixture(scope="module")
 def approach() -> tuple[AttributeGraph, ErrorChain]:
-    graph = AttributeGraph(load_task("tests/data/seed_4_5.yaml"))
+    graph = AttributeGraph(load_task(DATA / "seed_4_5.yaml"))
     return graph, chain_between(graph, "hole", "pin")
 
 
@@ -147,7 +147,7 @@ def test_certified_bounds_hold_where_first_order_fails(
         assert dtheta[:, k].max() <= iv.hi and dtheta[:, k].min() >= iv.lo
     assert tilt.max() <= cert.tilt
     # The first-order bound is exceeded: rotations bend the 3.18 cm screw and 28.6 cm driver.
-    # About 3.18·(1 − cos 5° cos 5°) ≈ .024 cm extra along z, so |Δz| ≈ .15 cm (issue text).
+    # About 3.18·(1 − cos 5° cos 5°) ≈ .024 cm extra along z, so |Δz| ≈ .15 cm (seed A.2).
     assert np.abs(dp[:, 2]).max() > first.dz.hi * 1.15
     assert np.abs(dp[:, 2]).max() == pytest.approx(0.15 * CM, rel=0.05)
     assert np.abs(dp[:, 0]).max() > first.dx.hi

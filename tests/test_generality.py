@@ -1,4 +1,4 @@
-"""The generality suite's fast subset (issue 12): the benchmark's own judgement, nominal proof.
+"""The generality suite's fast subset: the benchmark's own judgement, nominal proof.
 
 ``benchmarks/generality.py`` runs every task of ``fixtures/tasks/generality/expected.yaml``
 with a 500-trial proof; here the tasks marked ``fast`` run with the nominal proof only (a
@@ -35,7 +35,7 @@ FAST = [e for e in ENTRIES if e.fast]
 
 
 def test_the_suite_is_varied_and_every_task_states_its_outcome() -> None:
-    # Issue 12: at least 20 tasks, plannable and impossible ones, each with its expectation.
+    # At least 20 tasks, plannable and impossible ones, each with its expectation.
     assert len(ENTRIES) >= 20
     kinds = {e.expect for e in ENTRIES}
     assert kinds == {"plan", "refuse"}

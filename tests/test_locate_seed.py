@@ -55,6 +55,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _paths import BOX_FIXTURE_TASK, SEED_TASK, TASKS
 from scipy.optimize import brentq, minimize
 
 from synth.cli import main
@@ -73,9 +74,9 @@ from synth.exceptions import EstimationError
 from synth.models.features import contact_groups
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
+from synth.units import CM
 
-FIXTURE = "fixtures/tasks/box_in_fixture.yaml"
-CM = 0.01
+FIXTURE = str(BOX_FIXTURE_TASK)
 A, B = 4.45 * CM, 3.80 * CM  # half-sizes of the box [m]
 XW, YW = 4.0 * CM, 5.0 * CM  # walls at x = ±XW, y = ±YW [m]
 DELTA = math.asin(XW / math.hypot(A, B)) - math.atan2(B, A)  # rotation limit [rad]
@@ -534,7 +535,7 @@ def test_plan_uses_the_located_box(capsys: pytest.CaptureFixture[str]) -> None:
     """A task whose box is located only by contacts plans like its hand-typed equivalent."""
     from synth.strategies import plan_task
 
-    spec = load_task("fixtures/tasks/seed_4_8_fixture.yaml")
+    spec = load_task(TASKS / "seed_4_8_fixture.yaml")
     located, by_hand = (plan_task(s).to_json() for s in (spec, resolve_contacts(spec)))
     for d in (located, by_hand):
         d.pop("planning_time")
@@ -542,8 +543,8 @@ def test_plan_uses_the_located_box(capsys: pytest.CaptureFixture[str]) -> None:
     assert located == by_hand
     # The fixture holds the box to X ±.1, Y ±.55 cm, W ±1.3° about its nominal — tighter than
     # seed_4_8's ±0.3 in, ±0.2 in, ±5° (L2566) — so the search footprint is smaller.
-    free = plan_task(load_task("fixtures/tasks/seed_4_8.yaml")).to_json()
+    free = plan_task(load_task(SEED_TASK)).to_json()
     fixed_search, free_search = located["strategy"]["search"], free["strategy"]["search"]
     assert fixed_search["dx"] < free_search["dx"] and fixed_search["dy"] < free_search["dy"]
-    assert main(["plan", "fixtures/tasks/seed_4_8_fixture.yaml"]) == 0
+    assert main(["plan", str(TASKS / "seed_4_8_fixture.yaml")]) == 0
     assert "search" in capsys.readouterr().out

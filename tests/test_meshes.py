@@ -18,8 +18,8 @@ from hypothesis import strategies as st
 
 from synth.models import meshes
 from synth.models.meshes import block, box_with_holes, inscribed_area_ratio, pin
+from synth.units import CM
 
-CM = 0.01
 # A box and hole of the size of the seed's §4.8 example (BH1 4.90 cm deep, pin shaft 1.27 cm);
 # the box frame here is the bottom-face centre, so the hole sits at (x, y) from that centre.
 BOX = (10.0 * CM, 12.0 * CM, 6.0 * CM)

@@ -13,17 +13,16 @@ import math
 from pathlib import Path
 
 import pytest
+from _paths import TASKS
 from _tasks import plannable
 
 from synth.cli import main
 from synth.exceptions import NoStrategyError
 from synth.models.loader import load_task, parse_task
 from synth.strategies import PlanOptions, plan_task
+from synth.units import CM, INCH
 
-CM = 0.01
-IN = 0.0254
-DEG = math.pi / 180
-FIXTURES = Path("fixtures/tasks")
+FIXTURES = TASKS
 
 
 @pytest.fixture(scope="module")
@@ -47,10 +46,10 @@ def test_seed_4_8_searches_and_does_not_tap(seed) -> None:
     # L2645–2650: "Δz is thus small enough ... we don't have to tap" and "the error footprint
     # is bigger than Δr_ok, so we will have to search". Δz is the hand's alone (the box has no
     # z error): at most 0.05 in·(|sin γ| + |cos γ|) ≤ .180 cm (L2648) ≪ 0.75·1.71 = 1.28 cm.
-    assert e.first_order["dz"] <= 0.05 * IN * math.sqrt(2) + 1e-12
+    assert e.first_order["dz"] <= 0.05 * INCH * math.sqrt(2) + 1e-12
     assert e.dr > 0.762 * CM
     # Every in-plane footprint contains the box's own ±0.3 in × ±0.2 in: Δx ≥ 0.3 in.
-    assert e.dx >= 0.3 * IN
+    assert e.dx >= 0.3 * INCH
     text = " ".join(s.decisions)
     assert "no tap" in text and "search" in text and "exceeds Δr_ok" in text
     # The success test: Δz/τ (L2738: .169 = .127/.75).
@@ -67,7 +66,7 @@ def test_seed_4_8_tap_taps_near_the_hole_and_does_not_search(tap) -> None:
     e = s.errors
     assert e is not None
     # L2797: the box is ±0.75 in along z: Δz ≥ 1.905 cm > τ(d_f − d_s) = 1.28 cm: tap.
-    assert e.dz >= 0.75 * IN > 0.75 * 1.71 * CM
+    assert e.dz >= 0.75 * INCH > 0.75 * 1.71 * CM
     # In the plane only the hand errs: FPX/FPY ≤ .25 cm (L2805) < Δr_ok: no search.
     assert e.dr < 0.3 * CM < 0.762 * CM
     # The tapping place: ring 1 of radius .450 + .762 = 1.21 cm (L2341), like the seed's
@@ -79,12 +78,12 @@ def test_seed_4_8_tap_taps_near_the_hole_and_does_not_search(tap) -> None:
     assert s.tap.surface == "BTOP"
     # After the tap Δz is the hand's at tap and insertion: ≤ 2 × 0.1796 cm (the seed's
     # .180 at L2362 counts the insertion's only); far below 1.28 cm.
-    assert s.tap.dz_after <= 2 * 0.05 * IN * math.sqrt(2) + 0.002 * CM
+    assert s.tap.dz_after <= 2 * 0.05 * INCH * math.sqrt(2) + 0.002 * CM
     assert s.success_threshold == pytest.approx(s.tap.dz_after / 0.75)
     assert s.fine_time == pytest.approx(s.tap.time) and s.tap.time > 0
     # The tap's guarded move: 2 in above the surface to 2 in below (L2852), at the tap point.
-    assert s.tap.via.xf.translation[2] == pytest.approx(2 * IN)
-    assert s.tap.target.xf.translation[2] == pytest.approx(-2 * IN)
+    assert s.tap.via.xf.translation[2] == pytest.approx(2 * INCH)
+    assert s.tap.target.xf.translation[2] == pytest.approx(-2 * INCH)
     text = " ".join(s.decisions)
     assert "tap:" in text and "no search" in text
     assert result.counters["lp"] > 0  # the corrected Δz is a real LP
@@ -120,7 +119,7 @@ def test_decisions_do_not_depend_on_the_timing_rule() -> None:
 
 
 def test_cli_json_and_text(capsys) -> None:
-    assert main(["plan", str(FIXTURES / "seed_4_8.yaml"), "--json"]) == 0
+    assert main(["plan", str(FIXTURES / "seed_4_8.yaml"), "--json", "--proof-trials", "0"]) == 0
     doc = json.loads(capsys.readouterr().out)
     strategy = doc["strategy"]
     assert strategy["tap"] is None
@@ -142,7 +141,19 @@ def test_cli_json_and_text(capsys) -> None:
     assert doc["counters"]["ik"] > 0
     assert all({"candidate", "reason", "cause", "stage"} == set(r) for r in doc["rejected"])
 
-    assert main(["plan", str(FIXTURES / "seed_4_8_tap.yaml"), "--exhaustive", "--records"]) == 0
+    assert (
+        main(
+            [
+                "plan",
+                str(FIXTURES / "seed_4_8_tap.yaml"),
+                "--exhaustive",
+                "--records",
+                "--proof-trials",
+                "0",
+            ]
+        )
+        == 0
+    )
     out = capsys.readouterr().out
     assert "PHL SPEC" in out and "TAP: PIN1=BH1*TRANS(" in out and "SEARCH: NULL_RECORD" in out
     assert "tap: Δz" in out and "no search" in out and "exhaustive refined" in out

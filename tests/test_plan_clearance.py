@@ -1,6 +1,6 @@
 """Gross motions swept by the planner (synth/strategies/clearance.py), judged by the replay.
 
-The referee for "is this move clear" is the replay (issue 5: "every emitted program must parse
+The referee for "is this move clear" is the replay ("every emitted program must parse
 and replay successfully in the nominal world"); the sweep's own correctness is checked against
 dense sampling of the same joint-space segment with Coal's exact distances.
 
@@ -22,7 +22,7 @@ import pytest
 from _tasks import plannable, synthesized, with_base
 
 from synth.codegen.emitter import emit_program
-from synth.errors.locate import believed_graph
+from synth.models.believed import believed_graph
 from synth.models.loader import load_task
 from synth.models.spec import TaskSpec
 from synth.replay import replay
@@ -35,10 +35,10 @@ from synth.strategies.grasp import (
     transform_pin_approach,
 )
 from synth.strategies.records import Grasp, Rejection
+from synth.units import DEG
 
 FIXTURES = Path(__file__).parent.parent / "fixtures" / "tasks"
 OBSTRUCTED = "ω=180° γ=100° d=3.54 cm"
-DEG = math.pi / 180
 
 
 @pytest.fixture(scope="module")

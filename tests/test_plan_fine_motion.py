@@ -24,12 +24,11 @@ from synth.models.workcell import NominalPoses, WorkcellModel
 from synth.strategies.context import build_context
 from synth.strategies.planner import plan_task
 from synth.strategies.records import Grasp
+from synth.units import CM, DEG
 
 TASKS = Path(__file__).resolve().parent / "data" / "tasks"
 DOWEL = TASKS / "short_dowel_plate.yaml"
 SIDEWAYS = TASKS / "sideways_error.yaml"
-DEG = math.pi / 180
-CM = 0.01
 
 
 @pytest.fixture(scope="module")

@@ -11,6 +11,7 @@ import math
 import numpy as np
 import pinocchio as pin
 import pytest
+from _paths import SEED_TASK
 
 from synth.errors.estimate import RelationModel
 from synth.models.loader import load_task
@@ -32,16 +33,14 @@ from synth.strategies.grasp import (
 from synth.strategies.hypotheses import Affixed, Holding
 from synth.strategies.records import Grasp
 from synth.strategies.relations import approach_relation
+from synth.units import CM, DEG, INCH
 
-CM = 0.01
-IN = 0.0254
-DEG = math.pi / 180
 OPTS = PlanOptions()
 
 
 @pytest.fixture(scope="module")
 def ctx():
-    return build_context(load_task("fixtures/tasks/seed_4_8.yaml"))
+    return build_context(load_task(SEED_TASK))
 
 
 @pytest.fixture(scope="module")
@@ -59,8 +58,8 @@ def test_grasp_distance_is_the_seeds_3_54_cm(ctx) -> None:
         pin_shape.tip_taper_length,
         ctx.d_i,
         1.71 * CM,
-        0.25 * IN,
-        0.1 * IN,
+        0.25 * INCH,
+        0.1 * INCH,
         same_end=True,
     )
     assert d_min == pytest.approx(2.599 * CM, abs=1e-9)
@@ -71,14 +70,14 @@ def test_grasp_distance_is_the_seeds_3_54_cm(ctx) -> None:
 
 def test_long_interval_gives_three_distances_and_turn_over_limits() -> None:
     # L2056–2060: d_max − 0.6 in, d_min + 0.6 in, midpoint, when the interval ≥ 2.5 in.
-    d = grasp_distances(1 * IN, 4 * IN, OPTS)
-    assert d == pytest.approx((3.4 * IN, 1.6 * IN, 2.5 * IN))
+    d = grasp_distances(1 * INCH, 4 * INCH, OPTS)
+    assert d == pytest.approx((3.4 * INCH, 1.6 * INCH, 2.5 * INCH))
     # L2076: l − (d_f + r_fp + κ) ≥ d ≥ d_i + r_fp + κ, turned over.
     lo, hi = grasp_distance_limits(
-        5 * IN, 0.1 * IN, 1 * IN, 1.5 * IN, 0.25 * IN, 0.1 * IN, same_end=False
+        5 * INCH, 0.1 * INCH, 1 * INCH, 1.5 * INCH, 0.25 * INCH, 0.1 * INCH, same_end=False
     )
-    assert (lo, hi) == pytest.approx((1.35 * IN, 3.15 * IN))
-    assert grasp_distances(3 * IN, 2 * IN, OPTS) == ()
+    assert (lo, hi) == pytest.approx((1.35 * INCH, 3.15 * INCH))
+    assert grasp_distances(3 * INCH, 2 * INCH, OPTS) == ()
 
 
 def test_hand_openings_follow_l2139() -> None:
@@ -94,16 +93,16 @@ def test_hand_openings_follow_l2139() -> None:
 
 def test_approach_points_match_the_phl_spec_printouts() -> None:
     # L2609: ω = 90°, γ = 135°: TRANS(ROTN(VECTOR(.679,.679,.281),149*DEG),VECTOR(-3.59,0,7.13)).
-    xf = transform_pin_approach(Grasp(90 * DEG, 135 * DEG, 3.54 * CM), 2 * IN)
+    xf = transform_pin_approach(Grasp(90 * DEG, 135 * DEG, 3.54 * CM), 2 * INCH)
     assert al_trans(xf) == "TRANS(ROTN(VECTOR(0.679,0.679,0.281),149*DEG),VECTOR(-3.59,0,7.13))"
     # L2661: ω = 90°, γ = 100°: ROTN(VECTOR(.608,.608,.510),126.*DEG), VECTOR(-5.,0,4.42).
-    xf = transform_pin_approach(Grasp(90 * DEG, 100 * DEG, 3.54 * CM), 2 * IN)
+    xf = transform_pin_approach(Grasp(90 * DEG, 100 * DEG, 3.54 * CM), 2 * INCH)
     assert al_trans(xf) == "TRANS(ROTN(VECTOR(0.608,0.608,0.51),126*DEG),VECTOR(-5,0,4.42))"
     # L2690: γ = 180°: VECTOR(0,0,8.62) = 3.54 + 5.08. The printout's axis (.924,.383,.001) is
     # rot(ẑ,45°)·rot(x̂,180°); the remark says ω = 315° (L2696, also L2244 and ROT(z,225°) =
     # ω − φ at L2248), whose axis is (.924,−.383,0): the printed rotation and the remark disagree
     # (a lost minus sign, repeated at L2692, L2723–2724?). We follow the remark.
-    xf = transform_pin_approach(Grasp(315 * DEG, 180 * DEG, 3.54 * CM), 2 * IN)
+    xf = transform_pin_approach(Grasp(315 * DEG, 180 * DEG, 3.54 * CM), 2 * INCH)
     np.testing.assert_allclose(xf.translation, [0, 0, 8.62 * CM], atol=0.005 * CM)
     axis = pin.log3(xf.rotation) / math.pi
     np.testing.assert_allclose(np.abs(axis), [0.924, 0.383, 0.0], atol=0.001)

@@ -81,7 +81,7 @@ def test_rack_beyond_the_hands_opening_is_refused_naming_the_opening() -> None:
 def test_rail_rack_program_grasps_in_every_sampled_world() -> None:
     """The replay (the referee) never reports GRASP FAILED in 100 sampled rack poses."""
     from synth.codegen.emitter import emit_program
-    from synth.errors.locate import believed_graph
+    from synth.models.believed import believed_graph
     from synth.replay.run import replay
 
     spec = load_task(TASKS / "uncertain_rack_rail.yaml")

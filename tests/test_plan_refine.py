@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 import pytest
+from _paths import SEED_TAP_TASK, SEED_TASK
 
 from synth.errors.bounds import build_error_lp
 from synth.models.loader import load_task
@@ -27,7 +28,6 @@ from synth.strategies.search import (
     plan_search,
     ring_points,
     search_extent,
-    search_rings,
 )
 from synth.strategies.tapping import (
     build_tap_lp,
@@ -36,10 +36,7 @@ from synth.strategies.tapping import (
     solve_tap_lp,
     surface_region,
 )
-
-CM = 0.01
-IN = 0.0254
-DEG = math.pi / 180
+from synth.units import CM, DEG, INCH
 
 
 def world_with(ctx, omega: float, gamma: float):
@@ -51,12 +48,12 @@ def world_with(ctx, omega: float, gamma: float):
 
 @pytest.fixture(scope="module")
 def seed():
-    return build_context(load_task("fixtures/tasks/seed_4_8.yaml"))
+    return build_context(load_task(SEED_TASK))
 
 
 @pytest.fixture(scope="module")
 def tap():
-    return build_context(load_task("fixtures/tasks/seed_4_8_tap.yaml"))
+    return build_context(load_task(SEED_TAP_TASK))
 
 
 def test_footprint_of_the_seeds_best_strategy(seed) -> None:
@@ -84,7 +81,7 @@ def test_hand_only_dz_of_a_tilted_grasp_is_the_seeds_180(seed) -> None:
     # ±0.05 in along its axes projects onto the hole axis with |sin γ| + |cos γ| = √2:
     # 0.127·√2 = 0.1796 cm (box errors are in-plane only).
     fp, _ = estimate_footprint(seed, approach_relation(seed, world_with(seed, 90, 135), 90 * DEG))
-    assert fp.first_order["dz"] == pytest.approx(0.05 * IN * math.sqrt(2), rel=1e-9)
+    assert fp.first_order["dz"] == pytest.approx(0.05 * INCH * math.sqrt(2), rel=1e-9)
     assert fp.first_order["dz"] == pytest.approx(0.180 * CM, abs=0.0005 * CM)
 
 
@@ -98,14 +95,14 @@ def test_tap_variation_footprint_matches_fpx_fpy(tap) -> None:
     assert fp.first_order["dy"] == pytest.approx(0.226 * CM, abs=0.0005 * CM)
     assert round(math.degrees(fp.first_order["zeta"])) in (60, 120)
     # Along the axis: the box's ±0.75 in plus the hand's 0.1796 cm.
-    assert fp.first_order["dz"] == pytest.approx(0.75 * IN + 0.05 * IN * math.sqrt(2), rel=1e-9)
+    assert fp.first_order["dz"] == pytest.approx(0.75 * INCH + 0.05 * INCH * math.sqrt(2), rel=1e-9)
 
 
 def test_tapping_place_search_follows_l2300(tap) -> None:
     region = surface_region(tap.graph, "box_top")
     # L2336–2341: Δr_td = max(0.3 in, .243, .226) = .762 cm; r = .450 + .762 = 1.21 cm.
     need = 0.243 * CM + tap.pin_shape.tip_radius
-    place = find_tapping_place(region, (3.85 * CM, 3.20 * CM), 0.45 * CM, 0.3 * IN, need, 10 * CM)
+    place = find_tapping_place(region, (3.85 * CM, 3.20 * CM), 0.45 * CM, 0.3 * INCH, need, 10 * CM)
     assert place is not None
     assert place.radius == pytest.approx(1.212 * CM, abs=1e-9)
     # The ring's points are the seed's table (L2345–2353), in its order.
@@ -136,7 +133,7 @@ def test_tapping_place_search_follows_l2300(tap) -> None:
     assert angle == pytest.approx(math.degrees(6 * 0.762 / 1.212), abs=0.05)
     # No ring qualifies when the need exceeds every clearance.
     assert (
-        find_tapping_place(region, (3.85 * CM, 3.2 * CM), 0.45 * CM, 0.3 * IN, 5 * CM, 10 * CM)
+        find_tapping_place(region, (3.85 * CM, 3.2 * CM), 0.45 * CM, 0.3 * INCH, 5 * CM, 10 * CM)
         is None
     )
 
@@ -152,7 +149,7 @@ def test_tap_lp_is_a_genuine_lp_and_matches_closed_forms(tap, seed) -> None:
     relations, bound = _tap_problem(tap, 90, 135, 90 * DEG, offset)
     # |m| ≤ box 0.75 in + hand 0.1796 cm (no box tilt in this fixture), plus the certified
     # remainder of the hand's 0.25° over its 3.5 cm lever (about 1e-3 cm).
-    closed = 0.75 * IN + 0.05 * IN * math.sqrt(2)
+    closed = 0.75 * INCH + 0.05 * INCH * math.sqrt(2)
     assert closed <= bound <= closed + 0.002 * CM
     problem = build_tap_lp(relations)
     assert problem.lp.a_ub.shape[0] == 2  # the measurement, |a·v| ≤ R_c
@@ -161,7 +158,7 @@ def test_tap_lp_is_a_genuine_lp_and_matches_closed_forms(tap, seed) -> None:
     first, certified = solve_tap_lp(tap, problem)
     # The tap cancels the box's z; independent hand errors at tap and insertion add:
     # 2 × 0.1796 cm. The seed's .180 (L2362) is the insertion's share alone.
-    assert first == pytest.approx(2 * 0.05 * IN * math.sqrt(2), rel=1e-6)
+    assert first == pytest.approx(2 * 0.05 * INCH * math.sqrt(2), rel=1e-6)
     assert first <= certified <= first + 0.002 * CM
     # A repeatable hand error (one block at both points, same hand orientation) cancels too.
     rep = dataclasses.replace(tap, options=PlanOptions(tap_hand_errors="repeatable"))
@@ -197,7 +194,7 @@ def test_search_pattern_of_l2743() -> None:
     # DW = step/R from W = 0 while W < 2π: ⌈2πk⌉ points on ring k.
     assert [len(ring_points(step, k)) for k in (1, 2, 3)] == [7, 13, 19]
     # L2753: R ≤ 1.72 = 3 rings for the footprint 1.58 × 1.15 (L2716).
-    assert search_rings(1.58 * CM, 1.15 * CM, 0.762 * CM, step) == 3
+    assert search_extent(1.58 * CM, 1.15 * CM, 0.762 * CM, step)[0] == 3
     # L2436: count the points within Δx/2 = .79, Δy/2 = .575: ring 1 only (|y| ≤ .548 there,
     # ring 2 needs |x| ≤ .79 and |y| ≤ .575 at R = 1.144, impossible).
     assert expected_points(pattern_points(step, 3), 1.58 * CM, 1.15 * CM) == 7
@@ -219,7 +216,7 @@ def test_search_pattern_of_l2743() -> None:
     assert (search.rings, search.expected_points) == (3, 7)
     assert search.time == pytest.approx(7 * 0.2)
     # L2753: R ≤ 1.72; 3 × 0.5715 = 1.7145 cm (the seed printed step and bound to 3 digits).
-    assert search.max_radius == pytest.approx(1.72 * CM, abs=0.006 * CM)
+    assert search.rings * search.step == pytest.approx(1.72 * CM, abs=0.006 * CM)
 
 
 def test_tap_lp_problem_is_built_apart_from_solving(tap) -> None:

@@ -1,6 +1,6 @@
 """A stand-alone program (the world binding printed before it) replays like the bare one.
 
-``synth plan --preamble`` writes :func:`synth.al.binding.preamble` before the program; the
+``synth plan --preamble`` writes :func:`synth.codegen.binding.preamble` before the program; the
 replay binds the same frames from the task. A top-level declaration of a bound frame with its
 type adopts it, so both texts run the same motions: the same outcome and simulated time, and
 the preamble's statements on top of the bare program's count.
@@ -15,8 +15,8 @@ from pathlib import Path
 import pytest
 
 from synth.al import ast
-from synth.al.binding import bind_world, preamble
 from synth.al.parser import parse_program
+from synth.codegen.binding import bind_world, preamble
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
 from synth.replay import replay

@@ -1,4 +1,4 @@
-"""Bounded Monte Carlo work (issue 19, deliverable 4): streamed trials, a tally, capped workers."""
+"""Bounded Monte Carlo work: streamed trials, a tally, capped workers."""
 
 from __future__ import annotations
 
@@ -13,9 +13,10 @@ import numpy as np
 import pytest
 
 import synth.replay.trials as trials_module
+from synth import cli
+from synth.cli import resolve_workers
+from synth.cores import available_cores
 from synth.exceptions import SynthError
-from synth.replay import cli_command
-from synth.replay.cli_command import available_cores, resolve_workers
 from synth.replay.report import RunReport
 from synth.replay.tally import P2Quantile, TrialTally
 from synth.replay.trials import TrialPool, iter_trials, max_in_flight
@@ -133,5 +134,5 @@ def test_workers_are_capped_at_the_cores_with_a_message() -> None:
 
 def test_a_trial_pool_never_has_more_workers_than_cores(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(trials_module, "available_cores", lambda: 3)
-    monkeypatch.setattr(cli_command, "available_cores", lambda: 3)
+    monkeypatch.setattr(cli, "available_cores", lambda: 3)
     assert TrialPool(1000).workers == 3 and TrialPool(2).workers == 2

@@ -1,4 +1,4 @@
-"""Monte Carlo trials on a Dask cluster (issue 14): the report of a local run with the same seed.
+"""Monte Carlo trials on a Dask cluster: the report of a local run with the same seed.
 
 A ``LocalCluster`` of two single-threaded worker processes runs the trials of the seed's search
 listing; every trial's run (outcome, line, message, time to the last bit, statements) and the
@@ -12,12 +12,11 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+import distributed
 import pytest
 
 from synth.cli import main
 from synth.replay import replay
-
-distributed = pytest.importorskip("distributed")
 
 ROOT = Path(__file__).parent.parent
 SEED_TASK = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"

@@ -1,4 +1,4 @@
-"""The replay's true world and contact geometry (issue 6, item 3), against hand geometry.
+"""The replay's true world and contact geometry, against hand geometry.
 
 Oracles: the seed fixture's numbers (box at (45.2, 102, 0) cm, BH1 at (3.85, 3.20, 4.90) cm in
 it, hole ⌀0.64 cm × 1.71 cm with a 0.25 cm chamfer, pin ⌀0.635 cm × 2 in with a 0.34 cm taper
@@ -23,10 +23,9 @@ from synth.models.workcell import TABLE, WorkcellModel
 from synth.replay.capture import captures, seat_depth, tip_placement
 from synth.replay.contact import first_contact, guided_motion
 from synth.replay.truth import HandErrors, link_error, nominal_world, sample_world
+from synth.units import CM, INCH
 
 ROOT = Path(__file__).parent.parent
-CM = 0.01
-INCH = 0.0254
 
 
 def Rz(rad: float) -> np.ndarray:

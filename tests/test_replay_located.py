@@ -37,6 +37,7 @@ import synth.replay.located as located
 from synth.codegen.emitter import emit_program
 from synth.errors.parameters import ParameterBlock, ParameterSpace
 from synth.exceptions import SpecError
+from synth.models.believed import believed_graph
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
 from synth.models.spec import Uncertainty
@@ -234,7 +235,7 @@ def test_a_wrong_locate_result_fails_the_replay(
     derive = locate.derive_link
     monkeypatch.setattr(locate, "derive_link", lambda *args, **kw: wrong(derive(*args, **kw)))
     spec = load_task(SEED_FIXTURE)
-    program = emit_program(plan_task(spec).strategy, locate.believed_graph(spec))
+    program = emit_program(plan_task(spec).strategy, believed_graph(spec))
     trials = 40
     report = replay(program, spec, trials=trials, seed=0)
     assert report.nominal.success  # the program does what its (wrong) beliefs say

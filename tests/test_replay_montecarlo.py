@@ -1,4 +1,4 @@
-"""Monte Carlo replays of the seed's programs on seed_4_8 (issue 6, item 6).
+"""Monte Carlo replays of the seed's programs on seed_4_8.
 
 **Search listing (L2715–2781).** Measured with this replay, the arm at (20, 70) cm and the
 box 8.90 × 7.60 cm (seed L2340–2350): 1948 successes in 2000 trials (seed 0), rate 0.974, 95%
@@ -19,7 +19,7 @@ The default test replays 300 trials and asserts k ≥ 279 successes (93%). Binom
 for a true rate p = 0.966 (the lower end of the interval above), P(K ≤ 278 | n = 300) = 7e-4
 (scipy.stats.binom.cdf): the bound is not picked for this seed. Each abort is then checked by
 hand geometry: the pin ended beside the true box, below its top face. The 2000-trial run is
-marked ``slow`` (``pytest -m slow``, or SYNTH_SLOW=1) and asserts k ≥ 1880:
+marked ``slow`` (``make test-slow``) and asserts k ≥ 1880:
 P(K ≤ 1879 | n = 2000, p = 0.960) = 8e-6.
 
 **synth's own search program** (fixtures/golden/seed_4_8.al) differs from the listing in one
@@ -56,21 +56,16 @@ from synth.replay import (
     trial_seed,
     wilson_interval,
 )
+from synth.units import CM, INCH
 
 ROOT = Path(__file__).parent.parent
 DATA = Path(__file__).parent / "data" / "al"
 SEED = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
-CM = 0.01
-INCH = 0.0254
 BOX_HALF = (4.45 * CM, 3.80 * CM)  # fixture: 8.90 × 7.60 cm
 WORKERS = max(2, min(4, os.cpu_count() or 2))
 """Processes for the 2 000-trial runs: each holds the arm and workcell (~0.2 GB), so a CI
 machine with many cores must not start one per core."""
 BOX_TOP = 4.90 * CM
-
-
-def slow_selected(config: pytest.Config) -> bool:
-    return "slow" in (config.getoption("-m") or "") or bool(os.environ.get("SYNTH_SLOW"))
 
 
 @pytest.fixture(scope="module")
@@ -113,6 +108,7 @@ def check_search_failures(text: str, report_trials: list, seed: int) -> None:  #
         assert local[2] < BOX_TOP
 
 
+@pytest.mark.slow
 def test_search_listing_monte_carlo_300(search_text: str) -> None:
     report = replay(search_text, SEED, trials=300, seed=0, workers=2)
     mc = report.monte_carlo
@@ -133,9 +129,7 @@ def test_search_listing_monte_carlo_300(search_text: str) -> None:
 
 
 @pytest.mark.slow
-def test_search_listing_monte_carlo_2000(request: pytest.FixtureRequest, search_text: str) -> None:
-    if not slow_selected(request.config):
-        pytest.skip("2000 Monte Carlo trials: run with -m slow or SYNTH_SLOW=1")
+def test_search_listing_monte_carlo_2000(search_text: str) -> None:
     report = replay(search_text, SEED, trials=2000, seed=0, workers=WORKERS)
     mc = report.monte_carlo
     # measured 1948/2000 (module docstring)
@@ -144,6 +138,7 @@ def test_search_listing_monte_carlo_2000(request: pytest.FixtureRequest, search_
     check_search_failures(search_text, list(report.trials), seed=0)
 
 
+@pytest.mark.slow
 def test_search_listing_monte_carlo_2000_normal(search_text: str) -> None:
     # The issue's ≥ 99% of 2 000, with the box and hand errors read as the seed's chapter IX
     # reads a tolerance: normal, σ = tolerance/3, truncated at it (L7240–7242). Measured
@@ -181,6 +176,7 @@ def test_a_distribution_override_samples_every_block_from_it() -> None:
     )
 
 
+@pytest.mark.slow
 def test_synths_search_program_does_not_give_up_beside_the_box() -> None:
     # synth's golden program for seed_4_8 backs out of a point where nothing is felt instead of
     # aborting (records.OffSurface); under the uniform errors with which the seed's listing

@@ -1,4 +1,4 @@
-"""The referee's fast path and its diagnostics (issue 14).
+"""The referee's fast path and its diagnostics.
 
 **Recorded outcome counts.** On main at 14ae6b0, before the fast path, each of
 
@@ -47,9 +47,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from synth.cli import main
+from synth.cli import _TrialOutput, main
 from synth.replay import ReplayOptions, build_context, machine_for, replay, run_trial
-from synth.replay.cli_command import _TrialOutput
 from synth.replay.report import RunReport
 from synth.replay.run import TrialRecord, trial_errors
 from synth.replay.truth import HandErrors, nominal_world

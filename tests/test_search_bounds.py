@@ -1,4 +1,4 @@
-"""The search pattern's size is bounded before it is enumerated (issue 19, deliverable 4)."""
+"""The search pattern's size is bounded before it is enumerated."""
 
 from __future__ import annotations
 
@@ -16,10 +16,9 @@ from synth.strategies.search import (
     points_within_box,
     search_size_problem,
 )
+from synth.units import CM
 
 SEED_TASK = Path(__file__).resolve().parent.parent / "fixtures" / "tasks" / "seed_4_8.yaml"
-
-CM = 0.01  # [m]
 
 
 def test_a_tiny_dr_ok_is_refused_without_summing_its_rings() -> None:

@@ -1,4 +1,4 @@
-"""Assembly sequences (issue 16): the spec, what a seat teaches, one program, proven as a whole.
+"""Assembly sequences: the spec, what a seat teaches, one program, proven as a whole.
 
 Oracles: exact SE3 composition of the seed's error model (True = Nominal ∘ transl(t) ∘ rot(ẑ, rz))
 against the certified rows of synth/errors/seat.py; the replay's true worlds against the
@@ -216,7 +216,7 @@ def test_plate_json_one_record_per_step_and_no_second_tap(tmp_path, capsys):
 
 
 def test_the_service_accepts_a_sequence(tmp_path):
-    from _server_support import YAML, client_for
+    from _server_support import YAML, client_for, done
 
     from server.settings import Settings
 
@@ -225,8 +225,7 @@ def test_the_service_accepts_a_sequence(tmp_path):
         answer = client.post(
             "/v1/plans?trials=2&validate=true", content=PLATE.read_text(), headers=YAML
         )
-    assert answer.status_code == 201, answer.text
-    plan = answer.json()
+        plan = done(client, answer)  # a job: 202, then its result
     assert plan["program"].startswith("{ ASSEMBLY SEQUENCE: 2 STEPS")
     assert [s["hole"] for s in plan["steps"]] == ["PH1", "PH2"]
     assert plan["validation"]["nominal"]["outcome"] == "success"

@@ -1,7 +1,10 @@
 """HTTP API through FastAPI's TestClient: every endpoint and every error status.
 
 One app (one worker process) serves the module; tests that need other settings override
-``get_settings`` for their duration, the way the style guide's FastAPI tutorial does.
+``get_settings`` for their duration, the way the style guide's FastAPI tutorial does. Plans and
+replays are jobs: a submission is answered 202 and followed to its end (``_server_support``);
+the job flow itself (waiting, batches, DELETE, restarts) is in ``test_server_jobs.py`` and
+``test_server_process.py``.
 """
 
 from __future__ import annotations
@@ -15,7 +18,7 @@ from pathlib import Path
 
 import pytest
 import yaml
-from _server_support import HAVE_PLANNER, SEED, YAML, client_for, have_replay, overridden
+from _server_support import SEED, YAML, client_for, done, failed, overridden
 from fastapi.testclient import TestClient
 
 from server.db import NewPlan
@@ -44,11 +47,13 @@ def problem(response: object, status: int) -> dict[str, object]:
 # -- health and schema ----------------------------------------------------------------------------
 
 
-def test_healthz_reports_database_workers_and_stages(client: TestClient) -> None:
+def test_healthz_reports_database_workers_and_jobs(client: TestClient) -> None:
     body = client.get("/healthz").json()
     assert body["status"] == "ok"
     assert body["database"] == "ok"
     assert body["workers"]["size"] == 1 and body["workers"]["alive"] == 1
+    assert set(body["jobs"]) == {"unfinished", "running", "queued"}
+    assert "stages" not in body  # every stage is part of the build: nothing to probe
 
 
 def test_openapi_documents_every_endpoint(client: TestClient) -> None:
@@ -59,11 +64,17 @@ def test_openapi_documents_every_endpoint(client: TestClient) -> None:
         "/v1/plans",
         "/v1/plans/{plan_id}",
         "/v1/plans/{plan_id}/program.al",
+        "/v1/plans/batch",
         "/v1/replays",
+        "/v1/jobs/{job_id}",
     }
     body = paths["/v1/plans"]["post"]["requestBody"]["content"]
     assert {"application/yaml", "application/json"} <= set(body)
-    assert "422" in paths["/v1/plans"]["post"]["responses"]
+    for path in ("/v1/plans", "/v1/replays", "/v1/plans/batch"):
+        responses = paths[path]["post"]["responses"]
+        assert {"202", "422"} <= set(responses), path
+    assert {"get", "delete"} <= set(paths["/v1/jobs/{job_id}"])
+    assert "delete" in paths["/v1/plans/{plan_id}"]
     assert "HTTPBearer" in json.dumps(schema["components"]["securitySchemes"])
 
 
@@ -170,14 +181,17 @@ def test_trials_beyond_the_servers_maximum_is_422(client: TestClient) -> None:
     problem(client.post("/v1/replays", json={"plan_id": "0" * 32, "trials": 10**6}), 422)
 
 
-def test_time_budget_is_504_and_the_worker_is_replaced(client: TestClient) -> None:
+def test_time_budget_fails_the_job_with_504_and_the_worker_is_replaced(
+    client: TestClient,
+) -> None:
     with overridden(client.app, plan_timeout=0.002):  # type: ignore[arg-type]
-        body = problem(client.post("/v1/plans", content=SEED_TEXT, headers=YAML), 504)
+        submitted = client.post("/v1/plans?trials=1", content=SEED_TEXT, headers=YAML)
+    body = failed(client, submitted, 504)  # the job keeps the budget it was submitted with
     assert body["budget_seconds"] == pytest.approx(0.002)
     assert "time budget" in str(body["detail"])
-    # The overrun worker was killed; its replacement serves the next request.
-    answer = client.post("/v1/plans", content=b"name: t\nframes: []\n", headers=YAML)
-    assert answer.status_code == 422
+    # The overrun worker was killed; its replacement runs the next job.
+    replay = client.post("/v1/replays", json={"program": "BEGIN END", "spec": SEED_TEXT})
+    assert done(client, replay)["nominal"]["outcome"] in {"success", "failure", "abort"}
 
 
 # -- auth -----------------------------------------------------------------------------------------
@@ -190,6 +204,13 @@ def test_writes_need_the_token_reads_do_not(client: TestClient) -> None:
             problem(answer, 401)
             assert answer.headers["www-authenticate"] == "Bearer"
         problem(client.post("/v1/replays", json={"plan_id": "0" * 32}), 401)
+        problem(client.post("/v1/plans/batch", json={"tasks": [{"spec": SEED_TEXT}]}), 401)
+        for url in (f"/v1/plans/{'0' * 32}", f"/v1/jobs/{'0' * 32}"):
+            problem(client.delete(url), 401)
+            wrong = client.delete(url, headers={"Authorization": "Bearer wrong"})
+            problem(wrong, 401)
+            right = client.delete(url, headers={"Authorization": "Bearer s3cret"})
+            problem(right, 404)  # past the gate: nothing there
         authorised = {**YAML, "Authorization": "Bearer s3cret"}
         answer = client.post("/v1/plans", content=b"name: t\nframes: []\n", headers=authorised)
         assert answer.status_code == 422  # past the gate
@@ -201,6 +222,7 @@ def test_protected_reads_need_the_token(client: TestClient) -> None:
     with overridden(client.app, token="s3cret", protect_reads=True):  # type: ignore[arg-type]
         problem(client.get("/v1/plans"), 401)
         problem(client.get(f"/v1/plans/{'0' * 32}"), 401)
+        problem(client.get(f"/v1/jobs/{'0' * 32}"), 401)
         ok = client.get("/v1/plans", headers={"Authorization": "Bearer s3cret"})
         assert ok.status_code == 200
         assert client.get("/healthz").status_code == 200
@@ -211,10 +233,19 @@ def test_protected_reads_need_the_token(client: TestClient) -> None:
 
 @pytest.mark.parametrize(
     "path",
-    [f"/v1/plans/{'0' * 32}", f"/v1/plans/{'0' * 32}/program.al", "/v1/plans/x'%20OR%201=1", "/v2"],
+    [
+        f"/v1/plans/{'0' * 32}",
+        f"/v1/plans/{'0' * 32}/program.al",
+        "/v1/plans/x'%20OR%201=1",
+        f"/v1/jobs/{'0' * 32}",
+        "/v1/jobs/x'%20OR%201=1",
+        "/v2",
+    ],
 )
 def test_unknown_ids_and_routes_are_404(client: TestClient, path: str) -> None:
     problem(client.get(path), 404)
+    if path.startswith("/v1/") and not path.endswith(".al"):
+        problem(client.delete(path), 404)
 
 
 def test_unknown_plan_in_replay_is_404(client: TestClient) -> None:
@@ -238,15 +269,6 @@ def test_wrong_method_is_405(client: TestClient) -> None:
 def test_malformed_replay_requests_are_422(client: TestClient, body: dict[str, object]) -> None:
     answer = problem(client.post("/v1/replays", json=body), 422)
     assert answer["errors"]
-
-
-def test_replay_without_the_replay_stage_is_an_explicit_503(client: TestClient) -> None:
-    if have_replay():
-        pytest.skip("this build has a replay")
-    body = problem(
-        client.post("/v1/replays", json={"program": "BEGIN END", "spec": SEED_TEXT}), 503
-    )
-    assert "replay not available in this build" in str(body["detail"])
 
 
 # -- listing --------------------------------------------------------------------------------------
@@ -325,42 +347,41 @@ def test_a_bug_is_a_generic_logged_500(
     assert any(body["request_id"] in r.getMessage() and r.exc_info for r in caplog.records)
 
 
-# -- the seed's round trip (needs the planner and codegen) ----------------------------------------
-
-needs_planner = pytest.mark.skipif(not HAVE_PLANNER, reason="planner/codegen not in this build")
+# -- the seed's round trip ------------------------------------------------------------------------
 
 
-@needs_planner
 def test_seed_round_trip(client: TestClient) -> None:
     from synth.al.parser import parse_program
 
-    validate = have_replay()
-    answer = client.post(
-        f"/v1/plans?trials=2&validate={str(validate).lower()}", content=SEED_TEXT, headers=YAML
-    )
-    assert answer.status_code == 201, answer.text
-    plan = answer.json()
-    assert answer.headers["location"] == f"/v1/plans/{plan['id']}"
+    answer = client.post("/v1/plans?trials=2", content=SEED_TEXT, headers=YAML)
+    assert answer.status_code == 202, answer.text
+    job = answer.json()
+    assert answer.headers["location"] == f"/v1/jobs/{job['id']}"
+    assert job["kind"] == "plan" and job["state"] in ("queued", "running")
+    assert job["task"] == "seed_4_8" and job["result"] is None
+    plan = done(client, answer)
     assert plan["task"] == "seed_4_8"
     assert plan["strategy"]["search"] is not None  # seed §4.8: search needed
     assert plan["strategy"]["tap"] is None  # ... and no tap
-    assert (plan["validation"] is not None) == validate
-    assert client.get(answer.headers["location"]).json() == plan
+    assert plan["validation"] is not None
+    assert client.get(plan["links"]["self"]).json() == plan
     program = client.get(plan["links"]["program"])
     assert program.status_code == 200 and program.headers["content-type"].startswith("text/plain")
     assert program.text == plan["program"]
     parse_program(program.text)
-    # An identical submission is answered from the store.
-    again = client.post(
-        f"/v1/plans?trials=2&validate={str(validate).lower()}", content=SEED_TEXT, headers=YAML
-    )
-    assert again.status_code == 200 and again.json()["id"] == plan["id"]
+    # An identical submission is answered from the store: a job that is done at once.
+    again = client.post("/v1/plans?trials=2", content=SEED_TEXT, headers=YAML)
+    assert again.status_code == 201, again.text
+    reused = again.json()
+    assert reused["state"] == "done" and reused["reused"] is True
+    assert reused["plan_id"] == plan["id"] and reused["result"] == plan
+    assert reused["id"] != job["id"]
 
 
-@needs_planner
-def test_no_feasible_strategy_is_422_with_the_planners_reasons(client: TestClient) -> None:
+def test_no_feasible_strategy_fails_the_job_with_the_planners_reasons(client: TestClient) -> None:
     far = SEED_TEXT.replace("[24.1 cm, 117 cm, 0 cm]", "[24.1 cm, 517 cm, 0 cm]", 1)
-    body = problem(client.post("/v1/plans?validate=false", content=far, headers=YAML), 422)
+    submitted = client.post("/v1/plans?validate=false", content=far, headers=YAML)
+    body = failed(client, submitted, 422)
     assert body["title"] == "No feasible strategy" and body["task"] == "seed_4_8"
     reasons = body["reasons"]
     assert isinstance(reasons, list) and reasons
@@ -368,74 +389,67 @@ def test_no_feasible_strategy_is_422_with_the_planners_reasons(client: TestClien
     assert any("no arm solution" in r["reason"] for r in reasons)
 
 
-@needs_planner
-def test_a_task_too_large_for_the_planner_is_422_not_500(client: TestClient) -> None:
+def test_a_task_too_large_for_the_planner_fails_its_job_with_422_not_500(
+    client: TestClient,
+) -> None:
     tight = SEED_TEXT.replace("dr_ok: 0.762 cm", "dr_ok: 0.001 cm", 1)
     answer = client.post("/v1/plans?validate=false", content=tight, headers=YAML)
-    problem(answer, 422)
+    failed(client, answer, 422)
 
 
-@needs_planner
-def test_validation_without_replay_is_an_explicit_503(client: TestClient) -> None:
-    if have_replay():
-        pytest.skip("this build has a replay")
-    body = problem(client.post("/v1/plans", content=SEED_TEXT, headers=YAML), 503)
-    assert "replay not available in this build" in str(body["detail"])
-
-
-@needs_planner
-def test_a_new_app_on_the_same_file_serves_the_plans(client: TestClient) -> None:
+def test_a_new_app_on_the_same_file_serves_the_plans_and_jobs(client: TestClient) -> None:
     # A real restart after kill -9 is in test_server_process.py; this is the in-process twin.
-    created = client.post("/v1/plans?validate=false", content=SEED_TEXT, headers=YAML)
-    assert created.status_code in (200, 201), created.text
+    submitted = client.post("/v1/plans?validate=false", content=SEED_TEXT, headers=YAML)
+    plan = done(client, submitted)
+    job = client.get(submitted.headers["location"]).json()
     url = client.app.state.service.store.url  # type: ignore[attr-defined]
     with client_for(Settings(db_url=url, workers=1)) as second:
-        again = second.get(created.headers["location"])
+        again = second.get(plan["links"]["self"])
         assert again.status_code == 200
-        assert again.json() == created.json()
+        assert again.json() == plan
+        assert second.get(submitted.headers["location"]).json() == job
         listed = second.get("/v1/plans?limit=100").json()["items"]
-        assert created.json()["id"] in {item["id"] for item in listed}
+        assert plan["id"] in {item["id"] for item in listed}
 
 
-# -- replays (needs synth.replay) -------------------------------------------------------------
-
-needs_replay = pytest.mark.skipif(
-    not (HAVE_PLANNER and have_replay()), reason="replay not in this build"
-)
+# -- replays ----------------------------------------------------------------------------------
 
 
-@needs_replay
 def test_plan_is_validated_by_replay_and_replays_are_reproducible(client: TestClient) -> None:
-    created = client.post("/v1/plans?trials=3&seed=5", content=SEED_TEXT, headers=YAML)
-    assert created.status_code in (200, 201), created.text
-    plan = created.json()
+    plan = done(client, client.post("/v1/plans?trials=3&seed=5", content=SEED_TEXT, headers=YAML))
     validation = plan["validation"]
     assert set(validation) >= {"ok", "nominal", "monte_carlo"}
     assert validation["monte_carlo"]["trials"] == 3 and validation["monte_carlo"]["seed"] == 5
-    by_id = client.post("/v1/replays", json={"plan_id": plan["id"], "trials": 3, "seed": 5})
-    assert by_id.status_code == 200, by_id.text
-    assert by_id.json()["monte_carlo"] == validation["monte_carlo"]
-    inline = client.post(
-        "/v1/replays",
-        json={"program": plan["program"], "spec": SEED_TEXT, "trials": 3, "seed": 5},
+    submitted = client.post("/v1/replays", json={"plan_id": plan["id"], "trials": 3, "seed": 5})
+    assert submitted.status_code == 202 and submitted.json()["kind"] == "replay"
+    by_id = done(client, submitted)
+    assert by_id["monte_carlo"] == validation["monte_carlo"]
+    inline = done(
+        client,
+        client.post(
+            "/v1/replays",
+            json={"program": plan["program"], "spec": SEED_TEXT, "trials": 3, "seed": 5},
+        ),
     )
-    assert inline.status_code == 200 and inline.json()["nominal"] == by_id.json()["nominal"]
-    as_json = client.post(
-        "/v1/replays",
-        json={"program": plan["program"], "spec": yaml.safe_load(SEED_TEXT), "trials": 0},
+    assert inline["nominal"] == by_id["nominal"]
+    as_json = done(
+        client,
+        client.post(
+            "/v1/replays",
+            json={"program": plan["program"], "spec": yaml.safe_load(SEED_TEXT), "trials": 0},
+        ),
     )
-    assert as_json.status_code == 200 and as_json.json()["nominal"] == validation["nominal"]
+    assert as_json["nominal"] == validation["nominal"]
 
 
-@needs_replay
-def test_replay_of_a_program_that_does_not_parse_is_422_at_its_line(client: TestClient) -> None:
+def test_replay_of_a_program_that_does_not_parse_fails_at_its_line(client: TestClient) -> None:
     program = "BEGIN\nMOVE BMANIP TO ;\nEND\n"
-    body = problem(client.post("/v1/replays", json={"program": program, "spec": SEED_TEXT}), 422)
+    submitted = client.post("/v1/replays", json={"program": program, "spec": SEED_TEXT})
+    body = failed(client, submitted, 422)
     assert body["title"] == "AL syntax error"
     assert body["line"] == 2 and isinstance(body["column"], int)
 
 
-@needs_replay
 def test_replay_of_a_spec_that_does_not_validate_is_422(client: TestClient) -> None:
     body = problem(
         client.post("/v1/replays", json={"program": "BEGIN END", "spec": {"name": "t"}}), 422
@@ -443,7 +457,6 @@ def test_replay_of_a_spec_that_does_not_validate_is_422(client: TestClient) -> N
     assert body["path"] == "frames"
 
 
-@needs_planner
 def test_plan_document_is_synth_plan_json_plus_the_servers_keys(
     client: TestClient, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -452,7 +465,7 @@ def test_plan_document_is_synth_plan_json_plus_the_servers_keys(
     # validate=false proves by the nominal replay alone, as --proof-trials 0 does.
     assert main(["plan", str(SEED), "--json", "--proof-trials", "0"]) == 0
     cli = json.loads(capsys.readouterr().out)
-    served = client.post("/v1/plans?validate=false", content=SEED_TEXT, headers=YAML).json()
+    served = done(client, client.post("/v1/plans?validate=false", content=SEED_TEXT, headers=YAML))
     assert served["proof"]["passed"] and served["proof"]["decided_by"] == "nominal-only"
     assert set(cli) <= set(served)
     assert set(served) - set(cli) <= {

@@ -139,3 +139,49 @@ def test_reads_take_any_id_and_query(
     _no_500(client.get(f"/v1/plans?{params}"))
     _no_500(client.get(f"/v1/plans/{quote(plan_id, safe='')}"))
     _no_500(client.get(f"/v1/plans/{quote(plan_id, safe='')}/program.al"))
+
+
+@FUZZ
+@given(
+    job_id=st.text(max_size=40).filter(lambda s: s not in ("", ".", "..")) | st.just("0" * 32),
+    wait=st.text(max_size=8) | st.sampled_from(["0", "0.01", "-1", "1e9", "nan", "inf"]),
+)
+def test_jobs_take_any_id_and_wait(client: TestClient, job_id: str, wait: str) -> None:
+    path = quote(job_id, safe="")
+    _no_500(client.get(f"/v1/jobs/{path}?wait={quote(wait)}"))
+    _no_500(client.delete(f"/v1/jobs/{path}"))
+    _no_500(client.delete(f"/v1/plans/{path}"))
+
+
+batch_tasks = st.fixed_dictionaries(
+    {"spec": json_values | st.text(max_size=100) | st.just(SEED_DATA)},
+    optional={
+        "trials": json_values,
+        "seed": json_values,
+        "validate": json_values,
+        "try_harder": json_values,
+        "extra": json_values,
+    },
+)
+
+
+@FUZZ
+@given(
+    batch=st.fixed_dictionaries(
+        {},
+        optional={
+            "tasks": st.lists(batch_tasks | json_values, max_size=4) | json_values,
+            "other": json_values,
+        },
+    )
+)
+def test_batches_take_any_request(client: TestClient, batch: dict[str, Any]) -> None:
+    answer = client.post("/v1/plans/batch", json=batch)
+    _no_500(answer)
+    if answer.status_code == 202:  # every item is answered, each by itself
+        document = answer.json()
+        assert len(document["items"]) == len(batch["tasks"])
+        for item in document["items"]:
+            assert (item["job"] is None) == (item["problem"] is not None)
+            if item["problem"] is not None:
+                assert 400 <= item["problem"]["status"] < 500 or item["status"] == 503

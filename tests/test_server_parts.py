@@ -10,8 +10,9 @@ import time
 from pathlib import Path
 
 import pytest
+from pydantic import ValidationError
 
-from server.db import NewPlan, PlanStore
+from server.db import NewJob, NewPlan, PlanStore
 from server.errors import problem_for
 from server.exceptions import (
     MemoryBudgetExceeded,
@@ -20,7 +21,7 @@ from server.exceptions import (
     WorkerFailed,
 )
 from server.modelpaths import resolve_model_file
-from server.settings import settings_from_env
+from server.settings import Settings, SettingsError, settings_from_env
 from server.workers import WorkerPool
 from synth.exceptions import ALSyntaxError, SpecError, SynthError
 from synth.models.loader import parse_task
@@ -48,12 +49,38 @@ def test_settings_from_env(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(
-    "env",
-    [{"SYNTH_WORKERS": "many"}, {"SYNTH_WORKERS": "0"}, {"SYNTH_PLAN_TIMEOUT": "-1"}],
+    ("env", "message"),
+    [
+        ({"SYNTH_WORKERS": "many"}, "SYNTH_WORKERS='many': Input should be a valid integer"),
+        ({"SYNTH_WORKERS": "0"}, "SYNTH_WORKERS='0': Input should be greater than or equal to 1"),
+        ({"SYNTH_PLAN_TIMEOUT": "-1"}, "SYNTH_PLAN_TIMEOUT='-1': Input should be greater than 0"),
+        ({"SYNTH_DB": ""}, "SYNTH_DB='': String should have at least 1 character"),
+        ({"SYNTH_PROTECT_READS": "maybe"}, "SYNTH_PROTECT_READS='maybe': Input should be a valid"),
+        ({"SYNTH_TRIALS": "300"}, "the default trials (300, SYNTH_TRIALS) exceed the maximum"),
+    ],
 )
-def test_bad_settings_are_value_errors(env: dict[str, str]) -> None:
-    with pytest.raises(ValueError):
+def test_bad_settings_name_the_variable(env: dict[str, str], message: str) -> None:
+    with pytest.raises(SettingsError) as info:
         settings_from_env(env)
+    assert isinstance(info.value, ValueError)  # what `synth serve` reports as a usage error
+    assert str(info.value).startswith(message)
+
+
+def test_settings_come_from_the_environment_only_when_asked(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setenv("SYNTH_TOKEN", "from-the-shell")
+    monkeypatch.setenv("SYNTH_MAX_TRIALS", "50")
+    assert Settings().token is None  # a test's (or a caller's) settings ignore the shell
+    from_env = settings_from_env()
+    assert from_env.token == "from-the-shell" and from_env.max_trials == 50
+    # The CLI's flags over the environment: validated and normalised like the environment.
+    changed = from_env.with_(db_url="relative.db", model_dirs=("/tmp/../tmp",))
+    assert changed.db_url.startswith("sqlite:////") and changed.model_dirs == (Path("/tmp"),)
+    with pytest.raises(SettingsError, match="SYNTH_WORKERS=0"):
+        from_env.with_(workers=0)
+    with pytest.raises(ValidationError):  # frozen
+        from_env.workers = 3  # type: ignore[misc]
 
 
 # -- model paths ----------------------------------------------------------------------------------
@@ -148,6 +175,55 @@ def test_store_pages(tmp_path: Path) -> None:
     assert [p.id for p in rest] == ids[1::-1] and end is None
 
 
+def _job(client: str = "c") -> NewJob:
+    return NewJob("replay", client, "t", None, {"trials": 1}, {"program": "BEGIN END"})
+
+
+def test_store_keeps_a_jobs_lifecycle_and_its_first_final_state(tmp_path: Path) -> None:
+    store = PlanStore(f"sqlite:///{tmp_path / 'jobs.db'}")
+    store.create_schema()
+    job = store.add_job(_job())
+    assert job.state == "queued" and job.attempts == 0 and not job.finished
+    started = store.start_job(job.id)
+    assert started is not None and started.state == "running" and started.attempts == 1
+    assert started.started_at is not None and started.started_at.tzinfo is not None
+    assert store.start_job(job.id) is None  # only a queued job starts
+    ended = store.finish_job(job.id, "cancelled", problem={"status": 409})
+    assert ended is not None and ended.finished and ended.problem == {"status": 409}
+    # A job that finishes as it is cancelled keeps the first final state.
+    assert store.finish_job(job.id, "done", result={"ok": True}) is None
+    kept = store.get_job(job.id)
+    assert kept is not None and kept.state == "cancelled" and kept.result is None
+    assert store.delete_job(job.id) and store.get_job(job.id) is None
+    assert not store.delete_job(job.id)
+    plan, _ = store.add(_plan("k"))
+    assert store.delete_plan(plan.id) and store.get(plan.id) is None
+    assert not store.delete_plan(plan.id)
+    store.close()
+
+
+def test_store_recovers_jobs_after_a_crash_and_after_a_clean_stop(tmp_path: Path) -> None:
+    store = PlanStore(f"sqlite:///{tmp_path / 'jobs.db'}")
+    store.create_schema()
+    was_running = store.add_job(_job("a"))
+    store.start_job(was_running.id)
+    first, second = store.add_job(_job("b")), store.add_job(_job("c"))
+    done = store.add_job(_job("d"), state="done", result={"ok": True})
+    lost, queued = store.recover_jobs({"title": "Job lost", "status": 503})
+    assert [j.id for j in lost] == [was_running.id]
+    assert lost[0].state == "lost" and lost[0].problem == {"title": "Job lost", "status": 503}
+    assert [j.id for j in queued] == [first.id, second.id]  # oldest first
+    assert [j.client for j in queued] == ["b", "c"]
+    kept = store.get_job(done.id)
+    assert kept is not None and kept.state == "done"
+    store.start_job(first.id)
+    assert store.requeue_running() == 1  # a clean stop: running goes back to the queue
+    back = store.get_job(first.id)
+    assert back is not None and back.state == "queued" and back.started_at is None
+    assert back.attempts == 1  # the run it started is still counted
+    store.close()
+
+
 # -- the one error mapping ------------------------------------------------------------------------
 
 
@@ -193,6 +269,11 @@ def test_worker_pool_budget_busy_bugs_and_crashes() -> None:
             await asyncio.sleep(0)  # the long job queues first
             with pytest.raises(ServiceBusy):
                 await pool.run(operator.add, 1, 1, timeout=0.2, what="adding")
+            await slow
+            # With its own wait, a job that got a worker late still has its whole budget.
+            slow = asyncio.ensure_future(pool.run(time.sleep, 0.6, timeout=60, what="sleeping"))
+            await asyncio.sleep(0)
+            assert await pool.run(time.sleep, 0.3, timeout=0.5, wait=5, what="sleeping") is None
             await slow
             # A worker that dies mid-job is a bug (500) and is replaced.
             with pytest.raises(WorkerFailed, match="died"):

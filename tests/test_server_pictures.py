@@ -13,7 +13,7 @@ import re
 from collections.abc import Iterator
 
 import pytest
-from _server_support import SEED, YAML, client_for
+from _server_support import SEED, YAML, client_for, done
 from _svg import SvgFigure
 from fastapi.testclient import TestClient
 
@@ -30,8 +30,7 @@ def client(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TestClient]:
 @pytest.fixture(scope="module")
 def plan(client: TestClient) -> dict:
     answer = client.post("/v1/plans?trials=2", content=SEED.read_text(), headers=YAML)
-    assert answer.status_code == 201, answer.text
-    return dict(answer.json())
+    return done(client, answer)
 
 
 def seed_rule_count(search: dict) -> int:

@@ -1,4 +1,6 @@
-"""A real ``synth serve`` on loopback: answers, then survives ``kill -9`` with its plans intact."""
+"""A real ``synth serve`` on loopback: answers, then survives ``kill -9`` with its plans intact,
+and its jobs are never lost silently: after ``kill -9`` the running job is reported ``lost`` and
+the queued one runs; after a clean stop the running job runs again."""
 
 from __future__ import annotations
 
@@ -14,10 +16,12 @@ from contextlib import contextmanager
 from pathlib import Path
 
 import httpx
-import pytest
-from _server_support import HAVE_PLANNER, ROOT, SEED, YAML
+from _server_support import ROOT, SEED, YAML, done, finished
 
 STARTUP = 60.0  # [s] bound on the server's start (imports, worker warm-up)
+GOLDEN = (ROOT / "fixtures" / "golden" / "seed_4_8.al").read_text()
+LONG = {"program": GOLDEN, "spec": SEED.read_text(), "trials": 200}  # about 12 s
+QUICK = {"program": GOLDEN, "spec": SEED.read_text(), "trials": 0}
 
 
 class Server:
@@ -66,6 +70,17 @@ class Server:
             time.sleep(0.2)
         raise AssertionError("no worker became ready:\n" + "".join(self.log))
 
+    def wait_running(self, client: httpx.Client, location: str) -> dict:
+        """The job at ``location`` once it runs (bounded)."""
+        deadline = time.monotonic() + STARTUP
+        while time.monotonic() < deadline:
+            job = client.get(location).json()
+            if job["state"] == "running":
+                return dict(job)
+            assert job["state"] == "queued", job
+            time.sleep(0.1)
+        raise AssertionError(f"{location} did not start:\n" + "".join(self.log))
+
     def stop(self, sig: int) -> int:
         if self.process.poll() is None:
             self.process.send_signal(sig)
@@ -94,17 +109,57 @@ def test_serve_on_loopback_token_kill_9_and_restart(tmp_path: Path) -> None:
         server.wait_ready(client)
         bad = client.post("/v1/plans", content=b"name: t\nframes: []\n", headers=auth)
         assert bad.status_code == 422 and bad.json()["path"] == "frames"
-        if not HAVE_PLANNER:
-            pytest.skip("planner/codegen not in this build: kill -9 persistence not tested")
-        created = client.post("/v1/plans?validate=false", content=SEED.read_bytes(), headers=auth)
-        assert created.status_code == 201, created.text
-        location = created.headers["location"]
+        submitted = client.post("/v1/plans?validate=false", content=SEED.read_bytes(), headers=auth)
+        plan = done(client, submitted)
+        location = plan["links"]["self"]
         server.stop(signal.SIGKILL)  # no shutdown, no checkpoint: only what was committed
     with running(db, "--token", "s3cret") as (server, client):
         again = client.get(location)
         assert again.status_code == 200
-        assert again.json() == created.json()
-        assert client.get(f"{location}/program.al").text == created.json()["program"]
+        assert again.json() == plan
+        assert client.get(f"{location}/program.al").text == plan["program"]
+        assert client.get(submitted.headers["location"]).json()["state"] == "done"
         # Clean shutdown (uvicorn re-raises the signal once it has shut down).
         assert server.stop(signal.SIGTERM) in (0, -signal.SIGTERM)
         assert any("Application shutdown complete" in line for line in server.log)
+
+
+def test_after_kill_9_the_running_job_is_lost_and_the_queued_one_runs(tmp_path: Path) -> None:
+    db = tmp_path / "jobs.db"
+    with running(db) as (server, client):
+        server.wait_ready(client)
+        earlier = client.post("/v1/replays?wait=30", json=QUICK)
+        assert earlier.status_code == 201 and earlier.json()["state"] == "done", earlier.text
+        long = client.post("/v1/replays", json=LONG)
+        queued = client.post("/v1/replays", json=QUICK)  # one worker: it waits behind
+        assert long.status_code == queued.status_code == 202
+        server.wait_running(client, long.headers["location"])
+        assert client.get(queued.headers["location"]).json()["state"] == "queued"
+        server.stop(signal.SIGKILL)  # the running job's outcome is now unknown
+    with running(db) as (server, client):
+        lost = client.get(long.headers["location"]).json()
+        assert lost["state"] == "lost" and lost["finished_at"] is not None
+        assert lost["problem"]["status"] == 503 and lost["problem"]["title"] == "Job lost"
+        assert "submit the task again" in lost["problem"]["detail"]
+        ran = finished(client, client.get(queued.headers["location"]), timeout=120)
+        assert ran["state"] == "done" and ran["attempts"] == 1
+        assert ran["result"]["nominal"]["outcome"] == "success"
+        assert client.get(earlier.headers["location"]).json() == earlier.json()
+        assert any("was running when the server stopped: lost" in line for line in server.log)
+
+
+def test_after_a_clean_stop_the_running_job_runs_again(tmp_path: Path) -> None:
+    db = tmp_path / "jobs.db"
+    with running(db) as (server, client):
+        server.wait_ready(client)
+        long = client.post("/v1/replays", json=LONG)
+        location = long.headers["location"]
+        first = server.wait_running(client, location)
+        assert first["attempts"] == 1
+        assert server.stop(signal.SIGTERM) in (0, -signal.SIGTERM)
+        assert any("queued for the next start" in line for line in server.log)
+    with running(db) as (server, client):
+        again = server.wait_running(client, location)
+        assert again["attempts"] == 2 and again["started_at"] > first["started_at"]
+        cancelled = client.delete(location)  # no need to sit through the 200 trials
+        assert cancelled.status_code == 200 and cancelled.json()["state"] == "cancelled"

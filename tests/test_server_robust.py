@@ -1,6 +1,7 @@
-"""No 500 on client input: the inputs that used to crash the service get a 4xx problem, every
-status a POST can answer is in the OpenAPI schema, and an unexpected error is a 500 problem the
-app answers itself (it does not propagate to the server, which would drop the connection)."""
+"""No 500 on client input: the inputs that used to crash the service get a 4xx problem (as an
+answer, or as the problem of the job they became), every status a route can answer is in the
+OpenAPI schema, and an unexpected error is a 500 problem the app answers itself (it does not
+propagate to the server, which would drop the connection)."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ from pathlib import Path
 
 import httpx
 import pytest
-from _server_support import HAVE_PLANNER, SEED, YAML, client_for, overridden
+from _server_support import SEED, YAML, client_for, failed, overridden
 from fastapi.testclient import TestClient
 
 from server.main import create_app
@@ -50,20 +51,32 @@ def test_a_json_body_that_is_not_utf8_is_a_documented_400(client: TestClient) ->
     assert "400" in schema["paths"]["/v1/replays"]["post"]["responses"]
 
 
-def test_every_post_documents_the_statuses_the_service_answers(client: TestClient) -> None:
+def test_every_route_documents_the_statuses_the_service_answers(client: TestClient) -> None:
     schema = client.get("/openapi.json").json()
-    for path in ("/v1/plans", "/v1/replays"):
+    # Submissions: the job's outcome (504 over the budget, 422 no strategy, …) is the job's
+    # problem, not the POST's answer.
+    for path in ("/v1/plans", "/v1/replays", "/v1/plans/batch"):
         responses = schema["paths"][path]["post"]["responses"]
-        for status in ("400", "401", "408", "413", "422", "429", "500", "503", "504"):
+        assert "202" in responses and ("201" in responses) == (path != "/v1/plans/batch"), path
+        for status in ("400", "401", "408", "413", "422", "429", "500", "503"):
             assert status in responses, (path, status)
             assert "application/problem+json" in responses[status]["content"]
+    jobs = schema["paths"]["/v1/jobs/{job_id}"]
+    assert {"401", "404", "422"} <= set(jobs["get"]["responses"])
+    wait = next(p for p in jobs["get"]["parameters"] if p["name"] == "wait")
+    assert wait["schema"]["minimum"] == 0
+    for path in ("/v1/jobs/{job_id}", "/v1/plans/{plan_id}"):
+        responses = schema["paths"][path]["delete"]["responses"]
+        assert {"204", "401", "404"} <= set(responses), path
+        assert "application/problem+json" in responses["404"]["content"]
     listing = schema["paths"]["/v1/plans"]["get"]
     cursor = next(p for p in listing["parameters"] if p["name"] == "cursor")
     assert cursor["schema"]["anyOf"][0]["maximum"] == 2**63 - 1
 
 
-@pytest.mark.skipif(not HAVE_PLANNER, reason="planner/codegen not in this build")
-def test_an_in_directory_urdf_without_joints_is_422(client: TestClient, tmp_path: Path) -> None:
+def test_an_in_directory_urdf_without_joints_fails_its_job_with_422(
+    client: TestClient, tmp_path: Path
+) -> None:
     models = tmp_path / "models"
     models.mkdir()
     (models / "plank.urdf").write_text(NO_JOINTS_URDF)
@@ -72,7 +85,8 @@ def test_an_in_directory_urdf_without_joints_is_422(client: TestClient, tmp_path
     )
     with overridden(client.app, model_dirs=(models,)):  # type: ignore[arg-type]
         answer = client.post("/v1/plans?validate=false", content=spec, headers=YAML)
-    body = problem(answer, 422)
+    # The job runs with the model directories it was submitted under (the override has ended).
+    body = failed(client, answer, 422)
     assert "no movable joints" in str(body["detail"])
 
 

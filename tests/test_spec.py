@@ -9,6 +9,7 @@ import textwrap
 from pathlib import Path
 
 import pytest
+from _paths import SEED_TASK, TASKS
 
 from synth.cli import main
 from synth.exceptions import SpecError, UnitError
@@ -58,7 +59,7 @@ def test_good_spec_loads_and_composes() -> None:
 
 
 def test_seed_fixture_composes_the_seed_frames() -> None:
-    graph = AttributeGraph(load_task("fixtures/tasks/seed_4_8.yaml"))
+    graph = AttributeGraph(load_task(SEED_TASK))
     # T_wp = trans(rot(ẑ, 90°), (24.1, 117, .537) cm), seed L2577.
     pin_pose = graph.world_from("PIN1")
     assert pin_pose.translation == pytest.approx([0.241, 1.17, 0.00537])
@@ -72,7 +73,7 @@ def test_seed_fixture_composes_the_seed_frames() -> None:
 
 
 def test_insertion_parameters_given_and_derived() -> None:
-    spec = load_task("fixtures/tasks/seed_4_8.yaml")
+    spec = load_task(SEED_TASK)
     graph = AttributeGraph(spec)
     assert spec.insertion is not None
     given = derive(graph, spec.insertion)
@@ -172,7 +173,7 @@ def test_cli_json_shape() -> None:
             "-m",
             "synth.cli",
             "errors",
-            "fixtures/tasks/screw_on_driver.yaml",
+            str(TASKS / "screw_on_driver.yaml"),
             "--from",
             "hole",
             "--to",
@@ -193,7 +194,7 @@ def test_cli_json_shape() -> None:
 
 
 def test_cli_errors_against_the_world_frame(capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["errors", "fixtures/tasks/seed_4_8.yaml", "--from", "world", "--to", "BH1"]) == 0
+    assert main(["errors", str(SEED_TASK), "--from", "world", "--to", "BH1"]) == 0
     out = capsys.readouterr().out
     # In the world frame BH1's x error is the box's ±0.3 in = ±0.762 cm plus the box rotation
     # ±5° acting on the hole's lever arm y = 3.20 cm: 3.20·0.0873 = 0.279 cm; 1.041 cm in all.

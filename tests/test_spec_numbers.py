@@ -17,13 +17,10 @@ import yaml
 
 from synth.exceptions import SpecError, UnitError
 from synth.models.loader import validate_task
-from synth.units import MAX_MAGNITUDE, RATE_RANGE, parse_quantity, rate_si
+from synth.units import DEG, INCH, MAX_MAGNITUDE, RATE_RANGE, parse_quantity, rate_si
 
 ROOT = Path(__file__).resolve().parents[1]
 SEED = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
-CM = 0.01
-INCH = 0.0254
-DEG = math.pi / 180.0
 
 
 def seed() -> dict[str, Any]:

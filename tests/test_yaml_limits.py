@@ -1,4 +1,4 @@
-"""The one task loader (CLI and service): YAML bombs, depth and size limits (issue 19)."""
+"""The one task loader (CLI and service): YAML bombs, depth and size limits."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""``/healthz``: liveness, database and worker state, and the stages this build has."""
+"""``/healthz``: liveness, database, worker and job state."""
 
 from __future__ import annotations
 

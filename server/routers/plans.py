@@ -1,18 +1,41 @@
-"""``/v1/plans``: submit a task spec, read stored plans and their AL programs."""
+"""``/v1/plans``: submit tasks (each a job), read and delete stored plans and their programs."""
 
 from __future__ import annotations
 
+import json
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Query, Request, Response
-from fastapi.responses import PlainTextResponse
+from fastapi.encoders import jsonable_encoder
+from fastapi.responses import JSONResponse, PlainTextResponse
+from pydantic import ValidationError
 
-from server.db import StoredPlan
 from server.deps import Reader, ServiceDep, SettingsDep, Writer, client_key
+from server.errors import PROBLEM_MEDIA_TYPE, problem_document, validation_problem
 from server.exceptions import InvalidRequest
-from server.schemas import PlanLinks, PlanOut, PlanPage, PlanSummary, problem_responses
-from server.service import PlanOptions
+from server.routers.jobs import answer_submission
+from server.schemas import (
+    BatchIn,
+    BatchOut,
+    BatchTaskIn,
+    JobOut,
+    PlanOut,
+    PlanPage,
+    PlanSummary,
+    problem_responses,
+)
+from server.service import PlanRequest
 from server.settings import Settings
+from server.views import (
+    WaitQuery,
+    checked_trials,
+    checked_wait,
+    job_out,
+    job_url,
+    plan_links,
+    plan_out,
+)
+from synth.exceptions import SpecError
 
 router = APIRouter(prefix="/v1/plans", tags=["plans"])
 
@@ -54,48 +77,39 @@ _SPEC_BODY: dict[str, Any] = {
 }
 
 
-def plan_links(plan_id: str) -> PlanLinks:
-    """The ``links`` of a plan."""
-    return PlanLinks(self=f"/v1/plans/{plan_id}", program=f"/v1/plans/{plan_id}/program.al")
+def _options(
+    trials: int, seed: int, try_harder: bool, exhaustive: bool, validate: bool
+) -> PlanRequest:
+    return PlanRequest(  # trials and seed mean nothing without a replay: same hash
+        trials=trials if validate else 0,
+        seed=seed if validate else 0,
+        try_harder=try_harder,
+        exhaustive=exhaustive,
+        validate=validate,
+    )
 
 
-def plan_out(plan: StoredPlan) -> dict[str, Any]:
-    """The response document of a stored plan (planner keys first, then the server's)."""
-    return {
-        **plan.result,
-        "id": plan.id,
-        "task": plan.task_name,
-        "created_at": plan.created_at,
-        "content_hash": plan.content_hash,
-        "options": plan.options,
-        "program": plan.program,
-        "validation": plan.validation,
-        "links": plan_links(plan.id).model_dump(by_alias=True),
-    }
-
-
-def _trials(requested: int | None, settings: Settings) -> int:
-    if requested is None:
-        return settings.default_trials
-    if requested > settings.max_trials:
-        raise InvalidRequest(
-            f"trials={requested} is more than this server allows ({settings.max_trials})",
-            parameter="trials",
-        )
-    return requested
+_SUBMITTED: dict[int | str, dict[str, Any]] = {
+    202: {
+        "model": JobOut,
+        "description": "the job is queued or running: follow `Location` (GET /v1/jobs/{id})",
+    },
+    201: {
+        "model": JobOut,
+        "description": "the job is already final: it finished within `wait`, or an identical "
+        "submission had been planned (`reused`)",
+    },
+}
 
 
 @router.post(
     "",
-    status_code=201,
-    response_model=PlanOut,
+    status_code=202,
+    response_model=JobOut,
     dependencies=[Writer],
     openapi_extra=_SPEC_BODY,
-    summary="Plan a task, generate its AL program and validate it by replay",
-    responses={
-        200: {"model": PlanOut, "description": "an identical submission was already planned"},
-        **problem_responses(400, 401, 408, 413, 415, 422, 429, 500, 503, 504),
-    },
+    summary="Submit a task: a job plans it, generates its AL program and proves it by replay",
+    responses={**_SUBMITTED, **problem_responses(400, 401, 408, 413, 415, 422, 429, 500, 503)},
 )
 async def create_plan(
     request: Request,
@@ -109,24 +123,116 @@ async def create_plan(
     try_harder: Annotated[bool, Query(description="planner: refine more candidates")] = False,
     exhaustive: Annotated[bool, Query(description="planner: refine every candidate")] = False,
     validate: Annotated[bool, Query(description="replay the program (false: skip)")] = True,
+    wait: WaitQuery = 0,
 ) -> dict[str, Any]:
-    """Plan the task in the body; ``201`` with ``Location``, or ``200`` for a duplicate."""
-    trials = _trials(trials, settings)
-    options = PlanOptions(  # trials and seed mean nothing without a replay: same hash
-        trials=trials if validate else 0,
-        seed=seed if validate else 0,
-        try_harder=try_harder,
-        exhaustive=exhaustive,
-        validate=validate,
-    )
+    """``202`` with the job (``Location: /v1/jobs/{id}``); the spec is checked first (``422``).
+
+    Poll the job, or wait for it with ``?wait=S`` here or on the job; once ``done`` its
+    ``result`` is the plan. An identical submission is answered from the store: ``201``, a job
+    that is done at once with ``reused: true``.
+    """
+    options = _options(checked_trials(trials, settings), seed, try_harder, exhaustive, validate)
+    wait = checked_wait(wait, settings)
     body = await request.body()
-    plan, created = await service.create_plan(
+    job = await service.submit_plan(
         body, request.headers.get("content-type"), options, settings, client_key(request)
     )
-    response.headers["Location"] = f"/v1/plans/{plan.id}"
-    if not created:
-        response.status_code = 200
-    return plan_out(plan)
+    return await answer_submission(service, job, wait, response)
+
+
+def _batch_item(index: int, raw: Any, settings: Settings) -> tuple[bytes, str, PlanRequest]:
+    """The body, content type and options of task ``index`` of a batch (422 if invalid)."""
+    task = BatchTaskIn.model_validate(raw)
+    trials = checked_trials(task.trials, settings, parameter=f"tasks[{index}].trials")
+    options = _options(trials, task.seed, task.try_harder, task.exhaustive, task.validate_)
+    if isinstance(task.spec, dict):
+        return json.dumps(task.spec).encode(), "application/json", options
+    try:
+        return task.spec.encode("utf-8"), "application/yaml", options
+    except UnicodeEncodeError as exc:
+        raise SpecError("", f"the spec is not valid Unicode text (character {exc.start})") from None
+
+
+@router.post(
+    "/batch",
+    status_code=202,
+    response_model=BatchOut,
+    dependencies=[Writer],
+    summary="Submit many tasks at once: each its own plan job, each answered on its own",
+    responses={
+        202: {"model": BatchOut, "description": "at least one task became a job"},
+        **problem_responses(400, 401, 408, 413, 422, 429, 500, 503),
+    },
+)
+async def create_batch(
+    batch: BatchIn, request: Request, service: ServiceDep, settings: SettingsDep
+) -> Any:
+    """One item per task, in order: its job and ``location``, or its ``problem``.
+
+    An accepted task has ``status`` 202 (201 if reused); a refused one its own 422, 429, … —
+    a bad task does not stop the others. When no task was accepted the answer is a problem
+    document with the ``items``.
+    """
+    if len(batch.tasks) > settings.max_batch:
+        raise InvalidRequest(
+            f"{len(batch.tasks)} tasks in one batch; this server takes at most "
+            f"{settings.max_batch} (SYNTH_MAX_BATCH)",
+            parameter="tasks",
+            maximum=settings.max_batch,
+        )
+    client = client_key(request)
+    items: list[dict[str, Any]] = []
+    for index, raw in enumerate(batch.tasks):
+        try:
+            body, content_type, options = _batch_item(index, raw, settings)
+            job = await service.submit_plan(body, content_type, options, settings, client)
+        except ValidationError as exc:
+            errors = [{**e, "loc": ("tasks", index, *e["loc"])} for e in exc.errors()]
+            items.append(_rejected(index, validation_problem(errors)))
+        except Exception as exc:  # the task's own problem (a bug is logged, as a 500 item)
+            items.append(_rejected(index, problem_document(exc)))
+        else:
+            plan = await service.job_plan(job)
+            status = 201 if job.finished else 202
+            items.append(
+                {
+                    "index": index,
+                    "status": status,
+                    "location": job_url(job.id),
+                    "job": job_out(job, plan),
+                    "problem": None,
+                }
+            )
+    accepted = sum(1 for item in items if item["job"] is not None)
+    document = {"accepted": accepted, "rejected": len(items) - accepted, "items": items}
+    if accepted:
+        return document
+    statuses = {item["status"] for item in items}
+    status = statuses.pop() if len(statuses) == 1 else 422
+    problem = {
+        "type": "urn:synth:problem:batch-rejected",
+        "title": "No task of the batch was accepted",
+        "status": status,
+        "detail": f"all {len(items)} task(s) were refused; each item has its problem",
+        **document,
+    }
+    headers = {"Retry-After": "5"} if status in (429, 503) else None
+    return JSONResponse(
+        jsonable_encoder(problem),
+        status_code=status,
+        headers=headers,
+        media_type=PROBLEM_MEDIA_TYPE,
+    )
+
+
+def _rejected(index: int, problem: dict[str, Any]) -> dict[str, Any]:
+    return {
+        "index": index,
+        "status": problem["status"],
+        "location": None,
+        "job": None,
+        "problem": problem,
+    }
 
 
 @router.get(
@@ -171,6 +277,19 @@ async def list_plans(
 async def get_plan(plan_id: str, service: ServiceDep) -> dict[str, Any]:
     """The plan as it was answered when it was created."""
     return plan_out(await service.get_plan(plan_id))
+
+
+@router.delete(
+    "/{plan_id}",
+    status_code=204,
+    dependencies=[Writer],
+    summary="Delete a stored plan",
+    responses={204: {"description": "deleted"}, **problem_responses(401, 404, 500)},
+)
+async def delete_plan(plan_id: str, service: ServiceDep) -> Response:
+    """The plan is gone (``404`` afterwards); jobs that made it keep its id."""
+    await service.delete_plan(plan_id)
+    return Response(status_code=204)
 
 
 @router.get(

@@ -14,11 +14,12 @@ Semantics, with the seed's lines (S:n) and seed-al-subset.md sections:
 entered (al-language.md §3). A block's names are released when it ends. Its frames leave the
 affixment graph: their links are cut, and frames affixed to them keep their values (S:245). A
 program's top-level statements run in the *global* scope, which also holds the world binding
-(:mod:`synth.al.binding`). A top-level declaration of a frame the binding holds, with the binding's
-type, adopts that frame once (a stand-alone program declares the task's frames itself, ``synth plan
---preamble``); declaring it again is an error. Assigning a name that is declared nowhere declares it
-implicitly in the global scope, typed by its first value: generated programs never declare
-``DISTANCE_OFF``, ``CORR`` or ``PIN1`` (S:2737, S:2827). Reading a name with no value is an error.
+(:mod:`synth.codegen.binding`). A top-level declaration of a frame the binding holds, with the
+binding's type, adopts that frame once (a stand-alone program declares the task's frames
+itself, ``synth plan --preamble``); declaring it again is an error. Assigning a name that is
+declared nowhere declares it implicitly in the global scope, typed by its first value:
+generated programs never declare ``DISTANCE_OFF``, ``CORR`` or ``PIN1`` (S:2737, S:2827).
+Reading a name with no value is an error.
 No value defaults to 0: a referee should not invent one. Predeclared names (units, ``XHAT``,
 ``NILROTN``, ``TRUE``, ...) are read-only. So are the arm's hand names (``BLUE``, ``BMANIP``,
 ``BARM``, ``BHAND``, ``BFINGERS``: one frame, the sensed hand, moved only by ``MOVE``).
@@ -128,8 +129,8 @@ from synth.al.values import (
     LENGTH,
     TIME,
     TORQUE,
-    Dimension,
     Event,
+    Exponents,
     OperandError,
     Pose,
     PoseKind,
@@ -1007,7 +1008,7 @@ class Interpreter:
             raise self._error(e, f"{what} must be a scalar, not {type_name(value)}")
         return value
 
-    def _dimensioned(self, e: ast.Expr, cx: _Context, dim: Dimension, what: str) -> float:
+    def _dimensioned(self, e: ast.Expr, cx: _Context, dim: Exponents, what: str) -> float:
         value = self._scalar(e, cx, what)
         return self._apply(e, lambda: coerce(value, dim, what).value)  # type: ignore[no-any-return]
 

@@ -3,7 +3,7 @@
 The interpreter (:mod:`synth.al.interpreter`) owns the program's *beliefs* (its variables and
 affixments). Everything it learns about the *true* world comes through a :class:`Machine`:
 where the hand really is, the forces it senses, the finger opening, the clock. The replay
-(issue 6, ``synth/replay``) implements the protocol with inverse kinematics, Coal collisions and
+(``synth/replay``) implements the protocol with inverse kinematics, Coal collisions and
 contact; :class:`IdealMachine` implements it with a world that is exactly the program's beliefs.
 
 **Units.** SI throughout: poses are ``pin.SE3`` with translations in [m], forces [N], torques

@@ -3,8 +3,8 @@
 AL has typed geometric values (seed L1150–1160; al-language.md §2): scalars, vectors,
 rotations, frames and transes, plus booleans, strings and events. Here:
 
-- :class:`Scalar` — a float with a :class:`Dimension`;
-- :class:`Vector` — three floats with one :class:`Dimension` (a direction such as ``ZHAT`` is
+- :class:`Scalar` — a float with a :class:`Exponents`;
+- :class:`Vector` — three floats with one :class:`Exponents` (a direction such as ``ZHAT`` is
   dimensionless, a position or displacement is a length);
 - :class:`Rotation` — a 3×3 rotation matrix;
 - :class:`Pose` — a Pinocchio ``pin.SE3`` tagged ``"frame"`` (a location in the world) or
@@ -83,6 +83,8 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
+from synth.units import CM, DEG, INCH, OZ
+
 __all__ = [
     "ANGLE",
     "BARE_UNITS",
@@ -94,8 +96,8 @@ __all__ = [
     "TIME",
     "TORQUE",
     "UNITS",
-    "Dimension",
     "Event",
+    "Exponents",
     "OperandError",
     "Pose",
     "PoseKind",
@@ -115,13 +117,6 @@ __all__ = [
     "unary",
 ]
 
-CM: float = 0.01
-"""[m] One centimetre, AL's bare length unit."""
-INCH: float = 0.0254
-"""[m] One inch."""
-OZ: float = 0.028349523125 * 9.80665
-"""[N] One ounce-force (avoirdupois ounce under standard gravity), AL's force unit."""
-
 
 class OperandError(TypeError):
     """An operator or builtin got operands of the wrong type or dimension.
@@ -136,8 +131,11 @@ class OperandError(TypeError):
 
 
 @dataclass(frozen=True)
-class Dimension:
-    """Integer exponents over AL's base quantities: length, angle, force, time."""
+class Exponents:
+    """An AL physical dimension: integer exponents over length, angle, force and time.
+
+    (The task spec's :data:`synth.units.Dimension` is the *name* of a kind of quantity.)
+    """
 
     length: int = 0
     angle: int = 0
@@ -147,20 +145,20 @@ class Dimension:
     def _exponents(self) -> tuple[int, int, int, int]:
         return (self.length, self.angle, self.force, self.time)
 
-    def __mul__(self, other: Dimension) -> Dimension:
+    def __mul__(self, other: Exponents) -> Exponents:
         a, b = self._exponents(), other._exponents()
-        return Dimension(*(x + y for x, y in zip(a, b, strict=True)))
+        return Exponents(*(x + y for x, y in zip(a, b, strict=True)))
 
-    def __truediv__(self, other: Dimension) -> Dimension:
+    def __truediv__(self, other: Exponents) -> Exponents:
         a, b = self._exponents(), other._exponents()
-        return Dimension(*(x - y for x, y in zip(a, b, strict=True)))
+        return Exponents(*(x - y for x, y in zip(a, b, strict=True)))
 
-    def sqrt(self) -> Dimension:
+    def sqrt(self) -> Exponents:
         """The dimension whose square is this one; :class:`OperandError` if there is none."""
         exponents = self._exponents()
         if any(e % 2 for e in exponents):
             raise OperandError(f"SQRT of a {self.name} has no dimension")
-        return Dimension(*(e // 2 for e in exponents))
+        return Exponents(*(e // 2 for e in exponents))
 
     @property
     def dimensionless(self) -> bool:
@@ -185,12 +183,12 @@ class Dimension:
         return "·".join(parts)
 
 
-DIMENSIONLESS = Dimension()
-LENGTH = Dimension(length=1)
-ANGLE = Dimension(angle=1)
-FORCE = Dimension(force=1)
-TIME = Dimension(time=1)
-TORQUE = Dimension(length=1, force=1)
+DIMENSIONLESS = Exponents()
+LENGTH = Exponents(length=1)
+ANGLE = Exponents(angle=1)
+FORCE = Exponents(force=1)
+TIME = Exponents(time=1)
+TORQUE = Exponents(length=1, force=1)
 
 _DIMENSION_NAMES: dict[tuple[int, int, int, int], str] = {
     (0, 0, 0, 0): "dimensionless",
@@ -214,7 +212,7 @@ class Scalar:
     """A dimensioned scalar; ``value`` is SI ([m], [rad], [N], [s], [N·m], ...)."""
 
     value: float
-    dim: Dimension = DIMENSIONLESS
+    dim: Exponents = DIMENSIONLESS
 
     def __post_init__(self) -> None:
         if type(self.value) is not float:
@@ -234,7 +232,7 @@ class Vector:
     """A 3-vector with one dimension for all components; ``value`` SI, read-only."""
 
     value: NDArray[np.float64]
-    dim: Dimension = DIMENSIONLESS
+    dim: Exponents = DIMENSIONLESS
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "value", _frozen_array(self.value, (3,)))
@@ -265,10 +263,6 @@ class Pose:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "se3", pin.SE3(self.se3))
-
-    def as_kind(self, kind: PoseKind) -> Pose:
-        """The same pose tagged ``kind``."""
-        return self if kind == self.kind else Pose(self.se3, kind)
 
 
 @dataclass(eq=False)
@@ -335,7 +329,7 @@ def describe(value: Value) -> str:
     return f"EVENT {value.name}"
 
 
-def _with_unit(number: float | None, dim: Dimension, text: str | None = None) -> str:
+def _with_unit(number: float | None, dim: Exponents, text: str | None = None) -> str:
     shown = f"{number:.6g}" if text is None else text
     if dim.dimensionless:
         return shown
@@ -348,10 +342,10 @@ def _with_unit(number: float | None, dim: Dimension, text: str | None = None) ->
 
 
 # --------------------------------------------------------------------------------------------
-# Dimension checks
+# Exponents checks
 
 
-def coerce(value: Scalar, dim: Dimension, what: str = "value") -> Scalar:
+def coerce(value: Scalar, dim: Exponents, what: str = "value") -> Scalar:
     """``value`` as a scalar of ``dim``: a bare number is read in AL's bare units (cm, rad, ...).
 
     Raises:
@@ -364,7 +358,7 @@ def coerce(value: Scalar, dim: Dimension, what: str = "value") -> Scalar:
     raise OperandError(f"{what} must be a {dim.name}, not a {value.dim.name}")
 
 
-def coerce_vector(value: Vector, dim: Dimension, what: str = "vector") -> Vector:
+def coerce_vector(value: Vector, dim: Exponents, what: str = "vector") -> Vector:
     """:func:`coerce` for vectors."""
     if value.dim == dim:
         return value
@@ -373,7 +367,7 @@ def coerce_vector(value: Vector, dim: Dimension, what: str = "vector") -> Vector
     raise OperandError(f"{what} must be a {dim.name} vector, not a {value.dim.name} vector")
 
 
-def _common(a: Dimension, b: Dimension, op: str) -> Dimension:
+def _common(a: Exponents, b: Exponents, op: str) -> Exponents:
     """The dimension two operands of ``+ - rel`` share (a bare operand adapts to the other)."""
     if a == b or b.dimensionless:
         return a
@@ -382,14 +376,14 @@ def _common(a: Dimension, b: Dimension, op: str) -> Dimension:
     raise OperandError(f"cannot apply '{op}' to a {a.name} and a {b.name}")
 
 
-def _scalar_pair(a: Scalar, b: Scalar, op: str) -> tuple[float, float, Dimension]:
+def _scalar_pair(a: Scalar, b: Scalar, op: str) -> tuple[float, float, Exponents]:
     dim = _common(a.dim, b.dim, op)
     return coerce(a, dim).value, coerce(b, dim).value, dim
 
 
 def _vector_pair(
     a: Vector, b: Vector, op: str
-) -> tuple[NDArray[np.float64], NDArray[np.float64], Dimension]:
+) -> tuple[NDArray[np.float64], NDArray[np.float64], Exponents]:
     dim = _common(a.dim, b.dim, op)
     return coerce_vector(a, dim).value, coerce_vector(b, dim).value, dim
 
@@ -701,8 +695,8 @@ UNITS: dict[str, Scalar] = {
     "INCHES": Scalar(INCH, LENGTH),
     "INCH": Scalar(INCH, LENGTH),
     "IN": Scalar(INCH, LENGTH),
-    "DEG": Scalar(math.pi / 180.0, ANGLE),
-    "DEGREES": Scalar(math.pi / 180.0, ANGLE),
+    "DEG": Scalar(DEG, ANGLE),
+    "DEGREES": Scalar(DEG, ANGLE),
     "RAD": Scalar(1.0, ANGLE),
     "SEC": Scalar(1.0, TIME),
     "OZ": Scalar(OZ, FORCE),

@@ -9,7 +9,7 @@ differ); nothing else changes.
 
 :class:`ALEmitter` (seed §4.7): the view is :func:`synth.codegen.views.program_view`, the
 skeleton ``program.al.j2``; the optional preamble is the world binding of
-:func:`synth.al.binding.preamble` (frame declarations, nominal poses, affixments), so the file
+:func:`synth.codegen.binding.preamble` (frame declarations, nominal poses, affixments), so the file
 runs stand-alone. Like openapi-python-client's generated code, the output must pass the next
 tool: every program is parsed with :func:`synth.al.parser.parse_program` before it is
 returned, and a program our parser rejects is a :class:`~synth.exceptions.CodegenError`, never
@@ -21,8 +21,8 @@ from __future__ import annotations
 import functools
 from typing import ClassVar, Protocol
 
-from synth.al.binding import preamble as world_preamble
 from synth.al.parser import parse_program
+from synth.codegen.binding import preamble as world_preamble
 from synth.codegen.environment import template_environment, template_name
 from synth.codegen.views import ProgramView, program_view
 from synth.exceptions import ALSyntaxError, CodegenError

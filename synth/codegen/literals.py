@@ -5,7 +5,7 @@ task names, and each maker checks its input (seed-al-subset.md §1, al-language.
 
 - **numbers** carry an explicit unit — ``3.54*CM``, ``90*DEG``, ``8*OZ``, ``6.14*SEC`` — and a
   translation is one vector scaled by its unit, ``VECTOR(0,0,3.54)*CM`` (the form of
-  :func:`synth.al.binding.preamble`), so no AL runtime has to guess that bare numbers are cm,
+  :func:`synth.codegen.binding.preamble`), so no AL runtime has to guess that bare numbers are cm,
   rad or oz. They are printed with :data:`SIGNIFICANT_DIGITS` significant digits (at least
   the seed's three, L2789 footnote 21), never with an exponent, and values
   below :data:`RESOLUTION` in the printed unit print as ``0``. Non-finite numbers are refused;
@@ -33,8 +33,8 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from synth.al.names import NameRole, al_name_problem
-from synth.al.values import CM, OZ
 from synth.exceptions import CodegenError
+from synth.units import CM, DEG, OZ
 
 __all__ = [
     "RESOLUTION",
@@ -64,7 +64,6 @@ L2789), which leaves angles of 100° or more only whole degrees (±0.5°, twice 
 RESOLUTION = 1e-6
 """Magnitudes below this, in the printed unit (cm, deg, oz, s, or a unit axis), print as 0."""
 
-DEG = math.pi / 180.0
 """One degree [rad]."""
 
 _PRINCIPAL_AXES = ("XHAT", "YHAT", "ZHAT")

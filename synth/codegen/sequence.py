@@ -23,9 +23,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from synth.al.binding import preamble as world_preamble
 from synth.al.parser import parse_program
 from synth.codegen import literals as L
+from synth.codegen.binding import preamble as world_preamble
 from synth.codegen.environment import template_environment
 from synth.codegen.literals import Fragment
 from synth.errors.seat import SeatKnowledge

@@ -17,7 +17,7 @@ only iterate over view fields and test whether an optional piece is present:
   does not reproduce the printed .169/.239, so the planner owns that number).
 
 Names: the task's frames and the arm's names come from the world binding
-(:func:`synth.al.binding.bind_world`), and every name the record uses must be one of them and
+(:func:`synth.codegen.binding.bind_world`), and every name the record uses must be one of them and
 pass :func:`synth.al.names.al_name_problem` again. The program's own variables
 (``DISTANCE_OFF``, ``CORR``, ``FLAG``, ``R``, ``DW``, ``W``, ``X``, ``Y``, ``SETPNT``; S:2737–2760)
 get a numeric suffix when the task already uses the name, so a task frame called ``FLAG`` is
@@ -34,9 +34,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
-from synth.al.binding import bind_world
 from synth.al.names import RESERVED
 from synth.codegen import literals as L
+from synth.codegen.binding import bind_world
 from synth.codegen.literals import Fragment
 from synth.codegen.motion import Guard, MoveView, Waypoint, motion_sequence
 from synth.exceptions import CodegenError

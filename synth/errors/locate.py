@@ -639,16 +639,6 @@ _RESOLVED: weakref.WeakKeyDictionary[AttributeGraph, dict[frozenset[str], Attrib
 )
 
 
-def believed_graph(spec: TaskSpec) -> AttributeGraph:
-    """The task as a program believes it: every object located by contacts at its derived pose.
-
-    What the planner plans in, the emitter declares (``--preamble``) and the replay binds the
-    program's names to: all three must read located objects the same way (a fixture-held box
-    has no typed pose, only contacts). The replay draws their true poses from the contacts.
-    """
-    return AttributeGraph(resolve_contacts(spec) if spec.contacts else spec)
-
-
 def located_graph(graph: AttributeGraph, start: str, end: str) -> AttributeGraph:
     """The graph to build the chain ``start⁻¹ ∘ end`` on.
 
@@ -678,7 +668,6 @@ __all__ = [
     "LocationEstimate",
     "LocationResult",
     "Relaxation",
-    "believed_graph",
     "build_relaxation",
     "derive_link",
     "locate",

@@ -25,6 +25,16 @@ functional ``ℓ·X`` lies within ``[min ℓ·ΣvX_i, max ℓ·ΣvX_i] ± |ℓ|�
 Interval arithmetic overestimates when large quantities cancel (a 1 m lever arm out and back);
 :mod:`synth.errors.chain` therefore conjugates every perturbation to the end of the chain so that
 only local lever arms enter the products.
+
+**Rounding.** Everything is computed in float64, so the stored ``C₀`` and ``C_i`` differ from
+the exact products of the stored factors. Each product and sum pads ``B`` with the standard
+bound of that rounding (Higham, *Accuracy and Stability of Numerical Algorithms*, §3.1: an inner
+product of length k computed in floating point is within γ_k·|a|·|b| of the exact one, γ_k =
+k·u/(1 − k·u), u = 2⁻⁵³): γ_k·|A₀||B₀| for the value and γ_{k+1}·Σ m_i(|A₀||B_i| + |A_i||B₀|)
+for the linear part over the box, and then scales the padded ``B`` by (1 + γ_{k+n+8}) for the
+rounding of the (non-negative) bound arithmetic itself. The leaves' remainders are computed
+without cancellation (``1 − cos a = 2 sin²(a/2)``) and padded likewise. So the remainder bounds
+the true chain minus the first-order model *as stored*, not only in exact arithmetic.
 """
 
 from __future__ import annotations
@@ -33,16 +43,30 @@ from dataclasses import dataclass
 
 import numpy as np
 
+UNIT_ROUNDOFF = float(np.finfo(np.float64).eps) / 2.0
+"""u = 2⁻⁵³, the unit roundoff of float64."""
+
+
+def gamma(k: int) -> float:
+    """γ_k = k·u/(1 − k·u): the relative error bound of k float64 operations (Higham §3.1)."""
+    return k * UNIT_ROUNDOFF / (1.0 - k * UNIT_ROUNDOFF)
+
 
 def rotation_remainder(axis: int, a: float) -> np.ndarray:
-    """Entrywise bound of ``rot(e_axis, θ) − I − θ[e_axis]×`` for ``|θ| ≤ a`` (a ≤ π)."""
+    """Entrywise bound of ``rot(e_axis, θ) − I − θ[e_axis]×`` for ``|θ| ≤ a`` (a ≤ π).
+
+    ``1 − cos a`` on the two diagonal entries ⟂ e_axis, as 2 sin²(a/2) (no cancellation);
+    ``a − sin a`` off the diagonal, plus 4u·a for its cancellation; both scaled by 1 + γ_4 so
+    that the computed value is not below the exact one.
+    """
     a = abs(a)
     if a > np.pi:
         raise ValueError("rotation tolerance above 180° has no first-order model")
     b = np.zeros((3, 3))
     i, j = (axis + 1) % 3, (axis + 2) % 3
-    b[i, i] = b[j, j] = 1.0 - np.cos(a)
-    b[i, j] = b[j, i] = a - np.sin(a)
+    pad = 1.0 + gamma(4)
+    b[i, i] = b[j, j] = 2.0 * np.sin(a / 2.0) ** 2 * pad
+    b[i, j] = b[j, i] = (max(a - np.sin(a), 0.0) + 4.0 * UNIT_ROUNDOFF * a) * pad
     return b
 
 
@@ -91,16 +115,22 @@ class TaylorModel:
             )
         la, lb = self.spread(), other.spread()
         ra, rb = self.remainder, other.remainder
-        rem = la @ lb + (np.abs(a0) + la) @ rb + ra @ (np.abs(b0) + lb) + ra @ rb
+        abs_a0, abs_b0 = np.abs(a0), np.abs(b0)
+        k = a0.shape[-1]
+        rounding = gamma(k) * (abs_a0 @ abs_b0) + gamma(k + 1) * (abs_a0 @ lb + la @ abs_b0)
+        rem = la @ lb + (abs_a0 + la) @ rb + ra @ (abs_b0 + lb) + ra @ rb + rounding
+        rem = rem * (1.0 + gamma(k + len(self.magnitude) + 8))
         return TaylorModel(a0 @ b0, lin, rem, self.magnitude)
 
     def __add__(self, other: TaylorModel) -> TaylorModel:
-        return TaylorModel(
-            self.value + other.value,
-            self.linear + other.linear,
-            self.remainder + other.remainder,
-            self.magnitude,
+        value = self.value + other.value
+        linear = self.linear + other.linear
+        # each stored sum is within u of the exact one: |C₀| u, and Σ m_i |C_i| u over the box
+        rounding = UNIT_ROUNDOFF * (
+            np.abs(value) + np.tensordot(self.magnitude, np.abs(linear), axes=1)
         )
+        rem = (self.remainder + other.remainder + rounding) * (1.0 + gamma(len(self.magnitude) + 4))
+        return TaylorModel(value, linear, rem, self.magnitude)
 
     def __neg__(self) -> TaylorModel:
         return TaylorModel(-self.value, -self.linear, self.remainder, self.magnitude)

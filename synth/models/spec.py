@@ -27,7 +27,7 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_valida
 from synth.al.names import NameRole, al_name_problem
 from synth.models.catalog import ARM_MODELS
 from synth.models.contacts import ContactSpec
-from synth.units import parse_quantity, rate_si, read_quantity, registry, si_magnitude
+from synth.units import INCH, parse_quantity, rate_si, read_quantity, registry, si_magnitude
 
 _FRAME_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_-]*", re.ASCII)
 """A frame's own name (not its AL name): matched in full, so no trailing newline gets through."""
@@ -561,9 +561,9 @@ class HandSpec(_Model):
     ``finger_length`` back to the palm, a box of ``palm_size`` (x, y, z) behind them.
     """
 
-    max_opening: PositiveLength = 4.5 * 0.0254
-    finger_pad_radius: PositiveLength = 0.25 * 0.0254
-    finger_length: PositiveLength = 2.0 * 0.0254
+    max_opening: PositiveLength = 4.5 * INCH
+    finger_pad_radius: PositiveLength = 0.25 * INCH
+    finger_length: PositiveLength = 2.0 * INCH
     finger_thickness: PositiveLength = 0.01
     palm_size: tuple[PositiveLength, PositiveLength, PositiveLength] = (0.14, 0.05, 0.03)
 

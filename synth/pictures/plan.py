@@ -30,10 +30,11 @@ from synth.models.spec import HoleShape, PinShape
 from synth.strategies.records import ErrorFootprint, PinInHoleStrategy
 from synth.strategies.search import inside, pattern_points
 from synth.strategies.tapping import surface_region
+from synth.units import CM
 
 __all__ = ["Height", "PlanPicture", "draw_plan", "footprint_corners", "plan_picture"]
 
-CM = 100.0
+TO_CM = 1.0 / CM
 """Drawing unit: centimetres per metre."""
 
 
@@ -179,21 +180,23 @@ def plan_picture(strategy: PinInHoleStrategy, graph: AttributeGraph) -> PlanPict
 
 
 def _cm(value: float) -> str:
-    return f"{CM * value:.3g} cm"
+    return f"{TO_CM * value:.3g} cm"
 
 
 def _top_view(ax: Axes, p: PlanPicture) -> None:
     ax.set_gid("top-view")
     ax.add_patch(
-        Polygon(CM * p.outline, closed=True, fill=True, fc="0.93", ec="0.3", lw=1.0, gid="outline")
+        Polygon(
+            TO_CM * p.outline, closed=True, fill=True, fc="0.93", ec="0.3", lw=1.0, gid="outline"
+        )
     )
     ax.plot([], [], color="0.3", lw=1.0, label="surface outline")
     for name, x, y, r in p.holes:
         target = name == p.hole
         ax.add_patch(
             Circle(
-                (CM * x, CM * y),
-                CM * r,
+                (TO_CM * x, TO_CM * y),
+                TO_CM * r,
                 fc="white",
                 ec="black" if target else "0.4",
                 lw=1.4 if target else 0.8,
@@ -202,7 +205,7 @@ def _top_view(ax: Axes, p: PlanPicture) -> None:
         )
         ax.annotate(
             name,
-            (CM * x, CM * y),
+            (TO_CM * x, TO_CM * y),
             xytext=(0, 9),
             textcoords="offset points",
             ha="center",
@@ -211,7 +214,7 @@ def _top_view(ax: Axes, p: PlanPicture) -> None:
     dx, dy, zeta = p.footprint
     ax.add_patch(
         Polygon(
-            CM * footprint_corners(dx, dy, zeta),
+            TO_CM * footprint_corners(dx, dy, zeta),
             closed=True,
             fill=False,
             ec="tab:red",
@@ -224,7 +227,7 @@ def _top_view(ax: Axes, p: PlanPicture) -> None:
         fx, fy, fzeta = p.first_order
         ax.add_patch(
             Polygon(
-                CM * footprint_corners(fx, fy, fzeta),
+                TO_CM * footprint_corners(fx, fy, fzeta),
                 closed=True,
                 fill=False,
                 ec="tab:orange",
@@ -239,7 +242,7 @@ def _top_view(ax: Axes, p: PlanPicture) -> None:
         ax.add_patch(
             Circle(
                 (0, 0),
-                CM * radius,
+                TO_CM * radius,
                 fill=False,
                 ec="tab:blue",
                 lw=0.5,
@@ -248,8 +251,8 @@ def _top_view(ax: Axes, p: PlanPicture) -> None:
             )
         )
     if len(p.search_points):
-        pts = CM * p.search_points
-        step = CM * p.ring_radii[0]
+        pts = TO_CM * p.search_points
+        step = TO_CM * p.ring_radii[0]
         ax.plot(
             pts[:, 0],
             pts[:, 1],
@@ -271,7 +274,7 @@ def _top_view(ax: Axes, p: PlanPicture) -> None:
                 color="tab:blue",
             )
     if len(p.tap_ring):
-        ring = CM * p.tap_ring
+        ring = TO_CM * p.tap_ring
         ax.plot(
             ring[:, 0],
             ring[:, 1],
@@ -284,8 +287,8 @@ def _top_view(ax: Axes, p: PlanPicture) -> None:
     if p.tap is not None:
         tx, ty = p.tap
         ax.plot(
-            [CM * tx],
-            [CM * ty],
+            [TO_CM * tx],
+            [TO_CM * ty],
             "*",
             color="tab:green",
             ms=12,
@@ -294,7 +297,7 @@ def _top_view(ax: Axes, p: PlanPicture) -> None:
             gid="tap-place",
             label=f"tapping place ({_cm(tx)}, {_cm(ty)})",
         )
-    extent = float(np.max(np.abs(CM * p.outline))) if len(p.outline) else 2.0
+    extent = float(np.max(np.abs(TO_CM * p.outline))) if len(p.outline) else 2.0
     length = 0.35 * extent
     ax.add_patch(
         FancyArrowPatch(
@@ -319,9 +322,9 @@ def _top_view(ax: Axes, p: PlanPicture) -> None:
 
 def _side_view(ax: Axes, p: PlanPicture) -> None:
     ax.set_gid("side-view")
-    r, depth = CM * p.hole_radius, CM * p.hole_depth
+    r, depth = TO_CM * p.hole_radius, TO_CM * p.hole_depth
     width = max(4 * r, 2.0)
-    bottom = min(CM * h.z for h in p.heights) - 0.5
+    bottom = min(TO_CM * h.z for h in p.heights) - 0.5
     ax.add_patch(
         Polygon(
             [
@@ -343,8 +346,8 @@ def _side_view(ax: Axes, p: PlanPicture) -> None:
     )
     before = " before the tap" if p.dz_after_tap is not None else ""
     ax.axhspan(
-        -CM * p.dz,
-        CM * p.dz,
+        -TO_CM * p.dz,
+        TO_CM * p.dz,
         color="tab:red",
         alpha=0.12,
         lw=0,
@@ -352,7 +355,7 @@ def _side_view(ax: Axes, p: PlanPicture) -> None:
         label=f"surface height error{before} ±{_cm(p.dz)} (Δz)",
     )
     if p.dz_after_tap is not None:
-        after = CM * p.dz_after_tap
+        after = TO_CM * p.dz_after_tap
         ax.axhspan(
             -after,
             after,
@@ -363,10 +366,10 @@ def _side_view(ax: Axes, p: PlanPicture) -> None:
             label=f"after the tap ±{_cm(p.dz_after_tap)}",
         )
     approach = next(h for h in p.heights if h.name == "approach")
-    pin_r = CM * p.pin_radius
+    pin_r = TO_CM * p.pin_radius
     ax.add_patch(
         Rectangle(
-            (-pin_r, CM * approach.z),
+            (-pin_r, TO_CM * approach.z),
             2 * pin_r,
             1.5 * width,
             fc="tab:blue",
@@ -378,7 +381,7 @@ def _side_view(ax: Axes, p: PlanPicture) -> None:
     )
     colours = {"surface": "0.2", "approach": "tab:blue", "seat": "tab:green", "dtry": "tab:red"}
     for k, h in enumerate(p.heights):
-        z = CM * h.z
+        z = TO_CM * h.z
         ax.axhline(
             z,
             color=colours.get(h.name, "tab:gray"),
@@ -396,7 +399,7 @@ def _side_view(ax: Axes, p: PlanPicture) -> None:
             va="center",
         )
     ax.set_xlim(-width, width)
-    ax.set_ylim(bottom, max(CM * h.z for h in p.heights) + 0.8)
+    ax.set_ylim(bottom, max(TO_CM * h.z for h in p.heights) + 0.8)
     ax.set_xlabel(f"x in {p.hole} [cm]")
     ax.set_ylabel(f"z along {p.hole}'s axis [cm]")
     ax.set_title("side view: heights along the hole axis", fontsize=9)

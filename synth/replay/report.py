@@ -1,6 +1,6 @@
 """What a replay reports: violations, one run's outcome, the Monte Carlo summary, the whole report.
 
-The JSON shape (issue 6, SI units) is the one ``synth replay --json`` prints and the HTTP API
+The JSON shape (SI units) is the one ``synth replay --json`` prints and the HTTP API
 returns::
 
     {"ok": bool,
@@ -34,7 +34,6 @@ __all__ = [
     "RunReport",
     "Violation",
     "ViolationKind",
-    "replay_summary",
     "wilson_interval",
 ]
 
@@ -96,16 +95,17 @@ def wilson_interval(
 ) -> tuple[float, float]:
     """Wilson score interval of a binomial proportion (default 95%: z = Φ⁻¹(0.975)).
 
-    p̂ = k/n, centre (p̂ + z²/2n)/(1 + z²/n), half-width z·√(p̂(1−p̂)/n + z²/4n²)/(1 + z²/n).
+    scipy's ``binomtest(k, n).proportion_ci(method="wilson")`` at confidence erf(z/√2): centre
+    (p̂ + z²/2n)/(1 + z²/n), half-width z·√(p̂(1−p̂)/n + z²/4n²)/(1 + z²/n), p̂ = k/n.
     """
     if trials <= 0:
         return (0.0, 1.0)
-    p = successes / trials
-    z2 = z * z
-    denominator = 1.0 + z2 / trials
-    centre = (p + z2 / (2 * trials)) / denominator
-    half = z * math.sqrt(p * (1 - p) / trials + z2 / (4 * trials * trials)) / denominator
-    return (max(0.0, centre - half), min(1.0, centre + half))
+    from scipy.stats import binomtest  # scipy.stats is slow to import; most runs never ask
+
+    interval = binomtest(successes, trials).proportion_ci(
+        confidence_level=math.erf(z / math.sqrt(2.0)), method="wilson"
+    )
+    return (float(interval.low), float(interval.high))
 
 
 @dataclass(frozen=True)
@@ -172,7 +172,7 @@ class ReplayReport:
         return self.nominal.success
 
     def to_json(self) -> dict[str, Any]:
-        """The report as JSON (issue 6 shape, SI units)."""
+        """The report as JSON (SI units)."""
         out: dict[str, Any] = {
             "ok": self.ok,
             "nominal": self.nominal.to_json(),
@@ -181,38 +181,3 @@ class ReplayReport:
         if self.interrupted:
             out["interrupted"] = {"done": self.monte_carlo.trials, "planned": self.planned}
         return out
-
-
-def _seconds(value: float | None) -> str:
-    return "-" if value is None else f"{value:.2f} s"
-
-
-def replay_summary(report: ReplayReport) -> str:
-    """The report as text: the nominal run, its violations, and the Monte Carlo summary."""
-    n = report.nominal
-    lines = [f"replay {report.program} on task {report.task}"]
-    where = f" (line {n.line})" if n.line is not None else ""
-    lines.append(
-        f"nominal: {n.outcome}{where}: {n.message}; {_seconds(n.time)}, {n.statements} statements"
-    )
-    for v in n.violations:
-        lines.append(f"  violation: {v.kind} at line {v.line}: {v.detail}")
-    mc = report.monte_carlo
-    if mc.trials:
-        lo, hi = mc.interval()
-        rate = mc.success_rate or 0.0
-        counts = ", ".join(f"{k} {v}" for k, v in mc.outcomes.items())
-        lines.append(
-            f"Monte Carlo: {mc.trials} trials (seed {mc.seed}): success {100 * rate:.1f}% "
-            f"(95% Wilson interval {100 * lo:.1f}–{100 * hi:.1f}%)"
-        )
-        lines.append(f"  outcomes: {counts}")
-        lines.append(f"  time: mean {_seconds(mc.time_mean)}, p95 {_seconds(mc.time_p95)}")
-    else:
-        lines.append("Monte Carlo: no trials")
-    if report.interrupted:
-        lines.append(
-            f"  interrupted: {mc.trials} of {report.planned} trials done (Ctrl-C); "
-            "the figures above are over those"
-        )
-    return "\n".join(lines)

@@ -1,7 +1,7 @@
 """Replay an AL program on a task: a nominal run and Monte Carlo trials in sampled true worlds.
 
 :func:`replay` parses the program (syntax errors raise :class:`~synth.exceptions.ALSyntaxError`),
-binds the task's world to AL names (:mod:`synth.al.binding`), and runs it on a
+binds the task's world to AL names (:mod:`synth.codegen.binding`), and runs it on a
 :class:`~synth.replay.machine.ReplayMachine`:
 
 * once in the *nominal* world, where the truth equals the program's beliefs (every object at its
@@ -39,13 +39,13 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from synth.al import ast
-from synth.al.binding import WorldBinding, bind_world
 from synth.al.interpreter import Interpreter
 from synth.al.parser import parse_program
-from synth.errors.locate import believed_graph
+from synth.codegen.binding import WorldBinding, bind_world
 from synth.exceptions import ALRuntimeError, SpecError
 from synth.models.arm import Arm, manipulator_arm
 from synth.models.arm.collision import SceneCache
+from synth.models.believed import believed_graph
 from synth.models.graph import AttributeGraph, pose_to_se3
 from synth.models.loader import load_task
 from synth.models.park import nominal_environment, park_configuration
@@ -152,7 +152,7 @@ def build_context(
 def replay_graph(spec: TaskSpec, distribution: Distribution | None = None) -> AttributeGraph:
     """The graph a replay runs in: the program's beliefs, and the task's contacts.
 
-    Its frames are those of :func:`~synth.errors.locate.believed_graph` — an object located by
+    Its frames are those of :func:`~synth.models.believed.believed_graph` — an object located by
     contacts at the pose the planner derived, with the derived block: what the program was
     planned with and what its names are bound to — every block's distribution replaced by
     ``distribution``. It keeps the task's ``contacts``, from which

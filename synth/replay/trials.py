@@ -29,8 +29,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from synth.cores import available_cores
 from synth.models.spec import TaskSpec
-from synth.replay.cli_command import available_cores
 from synth.replay.machine import ReplayOptions
 from synth.replay.report import RunReport
 
@@ -217,7 +217,7 @@ class TrialPool:
 
     Use it as a context manager, or call :meth:`close`. ``workers=None`` takes one per CPU
     core, and more than the cores are capped at the cores
-    (:func:`~synth.replay.cli_command.available_cores`; the CLI says so when it caps).
+    (:func:`~synth.cores.available_cores`; the CLI says so when it caps).
     The start method is :func:`start_method`'s, decided when the pool is made; when it is
     None (an unguarded script where fork is unsafe) the pool has one worker, this process,
     and says so with a :class:`RuntimeWarning`. :attr:`method` tells which.

@@ -1,7 +1,7 @@
 """The true world of one replay trial: object poses and the arm's positioning errors.
 
-The program believes the task's *nominal* locations (:mod:`synth.al.binding`). The replay runs it
-against a world it does not know exactly, sampled here from the task itself — never from the
+The program believes the task's *nominal* locations (:mod:`synth.codegen.binding`). The replay
+runs it against a world it does not know exactly, sampled here from the task itself — never from the
 planner's estimates (design card: "the replay is the referee").
 
 **Object poses.** Every link with an uncertainty block is perturbed once per trial:

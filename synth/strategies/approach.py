@@ -101,10 +101,6 @@ class Candidate:
         return self.strategy.gross_time
 
 
-def _z(z: float) -> pin.SE3:
-    return pin.SE3(np.eye(3), np.array([0.0, 0.0, z]))
-
-
 def approach_heights(ctx: PlanContext, pickup: Pickup) -> tuple[float, float, float]:
     """``(standoff, dtry, Δz)`` [m] for a pickup (module docstring).
 

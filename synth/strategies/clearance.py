@@ -5,7 +5,7 @@ between sites to the arm. AL moves are joint-interpolated (seed L3846), and a jo
 move of the Stanford arm swings the hand in an arc about the column, which can pass through an
 object that the straight line between the two sites misses: with the seed_4_8 arm at
 (20, 80) cm, the planner's move from BPARK to the rack swept finger_left through BOX, and the
-replay refused the program (issue 5). So every candidate's gross motions are swept here, with
+replay refused the program. So every candidate's gross motions are swept here, with
 Coal and conservative advancement (:func:`synth.models.arm.swept_path`), along the straight
 joint-space segments between the configurations the program will move through: each target
 solved nearest the configuration before it, from the park on

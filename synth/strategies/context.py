@@ -19,7 +19,6 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from synth.errors.bounds import Interval, bound_linear
-from synth.errors.locate import believed_graph
 from synth.errors.parameters import ParameterSpace
 from synth.exceptions import SpecError
 from synth.models.arm import (
@@ -29,6 +28,7 @@ from synth.models.arm import (
     motion_time,
     nearest_solution,
 )
+from synth.models.believed import believed_graph
 from synth.models.graph import AttributeGraph, pose_to_se3
 from synth.models.insertion import InsertionParameters, derive, refuse_unprovable
 from synth.models.park import nominal_environment, park_configuration

@@ -24,7 +24,7 @@ direction only; what the start location leaves along the pin axis and across the
 grasp determination (``GRASP DETERM``) that the insertion's footprint then carries.
 
 Each surviving pickup plans on in its own child world of the assertion base, in which the pin
-is affixed to the hand with its grasp (issue item 6).
+is affixed to the hand with its grasp.
 """
 
 from __future__ import annotations

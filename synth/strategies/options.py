@@ -6,19 +6,16 @@ they are parameters here, with the seed's values as defaults and the line each c
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Literal
 
 from synth.models.arm import JIFFY
 from synth.strategies.records import OffSurface
+from synth.units import DEG, INCH, OZ
 
-INCH = 0.0254
 """[m] one inch."""
-DEG = math.pi / 180.0
 """[rad] one degree."""
 
-OUNCE_FORCE = 0.028349523125 * 9.80665
 """[N] the weight of one ounce (AL's ``OZ`` as a force)."""
 
 TimingRule = Literal["ruckig", "seed"]
@@ -58,7 +55,7 @@ class PlanOptions:
     """[m] dtry = d_f + this (L2188)."""
     standoff: float = 1 * INCH
     """[m] height of the approach point above the hole (L2190)."""
-    force_threshold: float = 8 * OUNCE_FORCE
+    force_threshold: float = 8 * OZ
     """[N] stop force of the guarded moves: ``on force(pin*zhat)>8*oz`` (L2148; the OCR reads
     "8*DZ" at L2735)."""
     tau: float = 0.75

@@ -3,8 +3,8 @@
 A :class:`PinInHoleStrategy` holds everything code generation needs — every number a template
 prints comes from here (the codegen must not decide anything). Destination points follow the
 seed's (what, base, xf) form (L1912–1925): make the controllable frame ``what`` coincide with
-``base ∘ xf``. ``to_json`` gives the shapes of ``synth plan --json`` (issue "strategy
-generation"), which the HTTP API returns too.
+``base ∘ xf``. ``to_json`` gives the shapes of ``synth plan --json``, which the HTTP API
+returns too.
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ import numpy as np
 import pinocchio as pin
 
 from synth.strategies.causes import classify
+from synth.units import INCH
 
 if TYPE_CHECKING:
     from synth.strategies.grasp import CenteringBounds
@@ -232,11 +233,6 @@ class Search:
     time: float
     off_surface: OffSurface = "retract"
     """What a search move that feels nothing does (see :data:`OffSurface`)."""
-
-    @property
-    def max_radius(self) -> float:
-        """Largest ring radius [m]."""
-        return self.rings * self.step
 
     def to_json(self) -> dict[str, Any]:
         """JSON form (SI)."""
@@ -470,7 +466,5 @@ class PlanResult:
         }
 
 
-DEG = math.pi / 180.0
-INCH = 0.0254
 RETREAT_DISTANCE = 2 * INCH
 """How far the hand backs off after letting go when the record names no retreat [m] (L2844)."""

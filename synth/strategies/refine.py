@@ -26,7 +26,6 @@ For one basic strategy, in its own world:
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -43,8 +42,7 @@ from synth.strategies.records import PinInHoleStrategy, Rejection
 from synth.strategies.relations import approach_relation, hole_only_relation
 from synth.strategies.search import plan_search, points_within_box, search_size_problem
 from synth.strategies.tapping import plan_tap
-
-DEGREE = math.pi / 180
+from synth.units import DEG
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,7 +59,7 @@ def _cm(x: float) -> str:
 
 
 def _deg(x: float) -> str:
-    return f"{x / DEGREE:.3f}°"
+    return f"{x / DEG:.3f}°"
 
 
 def axial_limit(tau: float, d_f: float, d_s: float) -> float:

@@ -126,11 +126,6 @@ def search_extent(dx: float, dy: float, dr_ok: float, step: float) -> tuple[int,
     raise ValueError(f"no search pattern of step {step} m covers {dx} × {dy} m within {dr_ok} m")
 
 
-def search_rings(dx: float, dy: float, dr_ok: float, step: float) -> int:
-    """Number of rings of :func:`search_extent`."""
-    return search_extent(dx, dy, dr_ok, step)[0]
-
-
 def expected_points(points: NDArray[np.float64], dx: float, dy: float) -> int:
     """Pattern points within ``Δx/2, Δy/2`` of the hole (L2436)."""
     return int(np.count_nonzero(inside(points, dx / 2, dy / 2)))

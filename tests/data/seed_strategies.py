@@ -1,7 +1,7 @@
 """The seed's two chosen strategies of §4.8 as hand-built records (no planner involved).
 
-Used by the codegen tests and by ``scripts/regen_golden.py`` when ``synth.strategies.planner``
-is not available. Every figure is the one the seed prints (seeds/000_1457622cbb9a2614.txt):
+The codegen tests emit them and compare with the seed's listings. Every figure is the one the
+seed prints (seeds/000_1457622cbb9a2614.txt):
 
 - ``seed_4_8`` — strategy 130523, PHL SPEC L2690–2710 and its program L2715–2781: ω = 315°,
   γ = 180°, d = 3.54 cm; hand at PIN1*TRANS(ROTN((.924, .383, .00106), 180°), (0, 0, 3.54) cm)
@@ -27,8 +27,6 @@ printed ones, because they are what the program moves to.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pinocchio as pin
 
@@ -41,10 +39,7 @@ from synth.strategies.records import (
     Search,
     Tap,
 )
-
-CM = 0.01
-DEG = math.pi / 180.0
-OZ = 0.028349523125 * 9.80665  # ounce-force [N]
+from synth.units import CM, DEG, OZ
 
 __all__ = ["STRATEGIES", "seed_4_8", "seed_4_8_tap"]
 

@@ -14,7 +14,9 @@ memory goes over the limit is *over-memory* (both: the child is killed and re-fo
 code other than 0, 1 (``replay``: the program failed) and 2 (a clear refusal) is a *crash*
 (``exit 70``: the CLI's internal error). In the API a
 status 500 or a dropped connection is an *HTTP 500*, a 504 a *hang*, a memory-budget 422
-*over-memory*. Each case is a Hypothesis example (generation only, no shrinking).
+*over-memory*; a 202 (a plan or replay job) is followed to its end, and its problem, if it
+failed, counts by its status (a *lost* job is a crash). Each case is a Hypothesis example
+(generation only, no shrinking).
 
 Usage: ``python tests/fuzz/fuzzrun.py [--cases N] [--timeout S] [--memory-mib M]
 [--surface spec,al,api] [--out DIR] [--seed K]``. Exit status 1 when any count but ``ok`` is
@@ -330,6 +332,32 @@ def _http_result(status: int | None, body: str, what: str) -> Result:
     return Result("ok")
 
 
+def _job_result(http: Any, status: int, body: str, what: str, timeout: float) -> Result:
+    """The outcome of an answer, following a 202's job to its end (the service runs plans and
+    replays as jobs): a failed job's problem counts as that status, a lost one as a crash."""
+    if status != 202:
+        return _http_result(status, body, what)
+    try:
+        url = json.loads(body)["links"]["self"]
+    except (ValueError, KeyError, TypeError):
+        return Result("http500", f"{what}: 202 without a job link")
+    deadline = time.monotonic() + timeout + 60
+    while time.monotonic() < deadline:
+        answer = http.get(url, params={"wait": 20})
+        if answer.status_code != 200:
+            return _http_result(answer.status_code, answer.text, f"GET job of {what}")
+        job = answer.json()
+        if job["state"] in ("queued", "running"):
+            continue
+        if job["state"] == "lost":
+            return Result("crash", f"{what}: job lost")
+        problem = job.get("problem") or {}
+        if job["state"] == "failed":
+            return _http_result(int(problem.get("status", 500)), json.dumps(problem), what)
+        return Result("ok")
+    return Result("hang", f"{what}: job unfinished after {timeout + 60:.0f} s")
+
+
 def fuzz_api(cases: int, timeout: float, out: Path, seed: int, budget: float) -> Tally:
     """The ``api`` surface (module docstring): half schemathesis, half mutated tasks."""
     import httpx
@@ -357,7 +385,7 @@ def fuzz_api(cases: int, timeout: float, out: Path, seed: int, budget: float) ->
                             content=case.text.encode("utf-8", "surrogatepass"),
                             headers={"Content-Type": "application/yaml"},
                         )
-                        result = _http_result(answer.status_code, answer.text, what)
+                        result = _job_result(http, answer.status_code, answer.text, what, timeout)
                     except httpx.HTTPError as exc:
                         result = Result("http500", f"{what}: {type(exc).__name__}")
                     tally.add(result, lambda case=case: case.text, out)
@@ -365,7 +393,7 @@ def fuzz_api(cases: int, timeout: float, out: Path, seed: int, budget: float) ->
                 what = f"{case.method} {case.path}"
                 try:
                     response = case.call(base_url=url, timeout=timeout + 30)
-                    result = _http_result(response.status_code, response.text, what)
+                    result = _job_result(http, response.status_code, response.text, what, timeout)
                 except Exception as exc:  # requests' errors: a dropped connection
                     result = Result("http500", f"{what}: {type(exc).__name__}")
                 tally.add(result, lambda case=case: case.as_curl_command(), out)

@@ -109,7 +109,3 @@ class Arm:
 
         problem = build_ik(self, transform_world_hand, hint=hint)
         return solve_ik_all(problem, rng if rng is not None else np.random.default_rng(0))
-
-    def body_names(self) -> tuple[str, ...]:
-        """Names of the arm's and hand's collision bodies."""
-        return tuple(b.name for b in self.bodies)

@@ -142,7 +142,7 @@ class CollisionScene:
 
     ``opening`` [m] places the fingers (default: fully open). ``allowed`` lists name pairs that
     may touch. The scene caches Pinocchio/Coal data, so it is not thread-safe; build one per
-    thread. Build a new scene (:meth:`with_held`, :meth:`with_opening`) when the grasp changes.
+    thread. Build a new scene (:meth:`with_held`) when the grasp changes.
     """
 
     def __init__(
@@ -330,12 +330,6 @@ class CollisionScene:
         keep = self.allowed if allowed is None else allowed
         return CollisionScene(
             self.arm, self.environment, held=held, allowed=keep, opening=self.opening
-        )
-
-    def with_opening(self, opening: float) -> CollisionScene:
-        """Rebuild the scene with the fingers at ``opening`` [m]."""
-        return CollisionScene(
-            self.arm, self.environment, held=self.held, allowed=self.allowed, opening=opening
         )
 
     # Queries ---------------------------------------------------------------------------------

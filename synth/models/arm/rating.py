@@ -129,16 +129,7 @@ class DexterityRating:
 
 
 class GraspRating(Protocol):
-    """Cost of a grasp from its configurations (the grasp first), lower is better.
-
-    ``whole_motion``: whether it looks past the grasp and its approach point, so that the
-    planner must solve the seat's configuration for it.
-    """
-
-    @property
-    def whole_motion(self) -> bool:
-        """Whether the rating needs the seat's configuration."""
-        ...
+    """Cost of a grasp from its configurations (the grasp first), lower is better."""
 
     def __call__(self, arm: Arm, configurations: Sequence[NDArray[np.float64]]) -> float:
         """Return the cost."""
@@ -152,11 +143,6 @@ class GraspRating(Protocol):
 @dataclass(frozen=True)
 class SeedGraspRating:
     """The seed's rule: |45° − θ5| at the grasp alone (L2096); the other configurations unused."""
-
-    @property
-    def whole_motion(self) -> bool:
-        """False: θ5 at the grasp alone."""
-        return False
 
     def __call__(self, arm: Arm, configurations: Sequence[NDArray[np.float64]]) -> float:
         """|45° − θ5| [rad] at ``configurations[0]``."""
@@ -174,11 +160,6 @@ class WorstDexterityRating:
     A grasp is as good as the worst place the arm must hold it: one fine at the rack but near
     a wrist singularity over the hole is a poor grasp.
     """
-
-    @property
-    def whole_motion(self) -> bool:
-        """True: the seat is rated too."""
-        return True
 
     def __call__(self, arm: Arm, configurations: Sequence[NDArray[np.float64]]) -> float:
         """−min D(q) [1] over ``configurations``."""

@@ -11,7 +11,6 @@ they default to ``velocity / DEFAULT_ACCELERATION_TIME`` unless the task gives t
 from __future__ import annotations
 
 import importlib.metadata
-import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -79,17 +78,32 @@ def place_base(
                 obj.placement = transform_world_base * obj.placement
 
 
-def disabled_link_pairs(srdf: Path | str) -> frozenset[frozenset[str]]:
-    """Link pairs of an SRDF's ``<disable_collisions link1=… link2=…/>`` elements."""
+def disabled_link_pairs(
+    model: pin.Model, geometry: pin.GeometryModel, srdf: Path | str
+) -> frozenset[frozenset[str]]:
+    """Link pairs an SRDF's ``<disable_collisions>`` elements exclude, read by Pinocchio.
+
+    ``pin.removeCollisionPairs`` removes them from every geometry pair of a copy of ``geometry``;
+    the removed pairs, by their links, are the result. Pairs of geometry on one joint never
+    enter (Pinocchio pairs only bodies of different joints; :class:`CollisionScene` calls them
+    adjacent).
+    """
+    path = Path(srdf)
+    if not path.is_file():
+        raise ArmModelError("SRDF file not found", str(srdf))
+    pairs = geometry.copy()
+    pairs.addAllCollisionPairs()
+    before = {(p.first, p.second) for p in pairs.collisionPairs}
     try:
-        root = ET.parse(srdf).getroot()
-    except (OSError, ET.ParseError) as exc:
+        pin.removeCollisionPairs(model, pairs, str(path))
+    except (RuntimeError, ValueError) as exc:
         raise ArmModelError(f"cannot read SRDF: {exc}", str(srdf)) from None
-    return frozenset(
-        frozenset((e.attrib["link1"], e.attrib["link2"]))
-        for e in root.iter("disable_collisions")
-        if "link1" in e.attrib and "link2" in e.attrib
-    )
+    after = {(p.first, p.second) for p in pairs.collisionPairs}
+
+    def link(index: int) -> str:
+        return str(model.frames[pairs.geometryObjects[index].parentFrame].name)
+
+    return frozenset(frozenset((link(a), link(b))) for a, b in before - after)
 
 
 def example_robot_data_dir() -> Path | None:
@@ -218,7 +232,9 @@ def load_urdf_arm(
         hand=hand,
         bodies=tuple(bodies),
         transform_world_base=t_wb,
-        disabled_pairs=disabled_link_pairs(srdf) if srdf is not None else frozenset(),
+        disabled_pairs=(
+            disabled_link_pairs(model, geometry, srdf) if srdf is not None else frozenset()
+        ),
     )
 
 

@@ -1,4 +1,4 @@
-"""Bind a task's world to AL names before a program runs (issue 6, item 5).
+"""Bind a task's world to AL names before a program runs.
 
 A generated program uses ``PIN1``, ``BH1``, ``BPARK`` and never declares them (S:2722–2844).
 They name the task's frames, and the program starts out believing the task's *nominal*
