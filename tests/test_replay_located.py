@@ -11,7 +11,7 @@ Oracles, all independent of :mod:`synth.replay.located` (and of ``synth.errors``
 * the planner's own derived block (``synth.errors.locate``), which the drawn truths must fill
   and not leave: that checks locate by the referee, not the other way round;
 * Monte Carlo: a planner fed a deliberately wrong locate result plans a wrong program, and the
-  replay fails it, while sampling around the planner's belief (the referee before issue 15)
+  replay fails it, while sampling around the planner's belief (the referee as it was)
   passes every trial.
 
 Acceptance rates of the proposal (w on the circle, the free slide on the floor's extent),
@@ -241,7 +241,7 @@ def test_a_wrong_locate_result_fails_the_replay(
     assert report.nominal.success  # the program does what its (wrong) beliefs say
     failing = trials - report.monte_carlo.outcomes.get("success", 0)
     assert failing >= at_least_failing
-    # the referee before issue 15 drew the truth around the belief: it passed them all
+    # the referee as it was drew the truth around the belief: it passed them all
     context = build_context(program, spec)
     around_belief = AttributeGraph(context.graph.spec.model_copy(update={"contacts": ()}))
     manipulator = spec.manipulator
