@@ -51,8 +51,15 @@ def quintic(tau: float) -> float:
 
 
 def quintic_inverse(s: float) -> float:
-    """τ with s(τ) = s (bisection; s is increasing on [0, 1])."""
-    s = min(max(s, 0.0), 1.0)
+    """τ with s(τ) = s (bisection; s is increasing on [0, 1]); exactly 0 and 1 at the ends.
+
+    The law is flat at both ends (s'(0) = s'(1) = 0): within ~2·10⁻⁶ of τ = 1 it rounds to
+    1.0, so a bisection for s = 1 would stop that far short of the segment's end time.
+    """
+    if s <= 0.0:
+        return 0.0
+    if s >= 1.0:
+        return 1.0
     lo, hi = 0.0, 1.0
     for _ in range(50):
         mid = 0.5 * (lo + hi)
