@@ -4,15 +4,15 @@ A ``MOVE`` becomes straight joint-space :class:`Segment` s between the inverse-k
 solutions of its targets, each with the hand positioning errors at its ends and a quintic time
 law (seed L3846: AL's 5th-order polynomials). Along a segment the held pin flies free, is guided
 by a hole, or slides along a surface (:class:`Phase`). A :class:`Motion` is the timeline the
-machine plays back: instants where monitors are checked (:class:`Checkpoint`), the state at any
-instant (:class:`MotionState`), and how it ends early (:class:`Stop`). Units: [m], [rad], [s],
-[N].
+machine plays back: the shared timeline of :mod:`synth.al.timeline` (instants where monitors
+are checked, resume and stop), the state at any instant (:class:`MotionState`), and how it ends
+early (:class:`Stop`). Units: [m], [rad], [s], [N].
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Literal, Protocol
 
@@ -20,13 +20,12 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from synth.al.machine import DurationConstraint, MonitorSpec, MotionConstraint, relation_holds
+from synth.al.timeline import Timeline
 from synth.models.arm import Obstacle
 from synth.models.workcell import HoleSite
 from synth.replay.report import Violation
 
 __all__ = [
-    "Checkpoint",
     "Motion",
     "MotionObserver",
     "MotionState",
@@ -34,12 +33,10 @@ __all__ = [
     "Segment",
     "Slide",
     "Stop",
-    "crossing_level",
     "point_on",
     "push_reaction",
     "quintic",
     "quintic_inverse",
-    "segment_times",
 ]
 
 
@@ -54,8 +51,15 @@ def quintic(tau: float) -> float:
 
 
 def quintic_inverse(s: float) -> float:
-    """τ with s(τ) = s (bisection; s is increasing on [0, 1])."""
-    s = min(max(s, 0.0), 1.0)
+    """τ with s(τ) = s (bisection; s is increasing on [0, 1]); exactly 0 and 1 at the ends.
+
+    The law is flat at both ends (s'(0) = s'(1) = 0): within ~2·10⁻⁶ of τ = 1 it rounds to
+    1.0, so a bisection for s = 1 would stop that far short of the segment's end time.
+    """
+    if s <= 0.0:
+        return 0.0
+    if s >= 1.0:
+        return 1.0
     lo, hi = 0.0, 1.0
     for _ in range(50):
         mid = 0.5 * (lo + hi)
@@ -171,40 +175,22 @@ class MotionState:
     opening: float
 
 
-@dataclass(frozen=True)
-class Checkpoint:
-    """An instant [s] where monitors are checked; ``level`` [N] of the contact force ramp."""
-
-    elapsed: float
-    level: float | None = None
-    violation: Violation | None = None
+def _no_state(elapsed: float) -> MotionState:
+    raise RuntimeError("a motion without states")
 
 
 @dataclass(eq=False)
-class Motion:
+class Motion(Timeline):
     """A motion being played back.
 
-    ``checkpoints`` are visited in order (``cursor``); ``state_at(elapsed)`` gives the state at
-    any instant; ``stop`` says how it ends early (with the force's unit ``normal`` and its
-    ``lever`` from the hand [m]); ``finish`` runs when it ends normally (a grasp, a release);
-    ``fired`` holds the monitors that fired, ``detected`` whether one fired on the contact.
+    Its timeline (:class:`~synth.al.timeline.Timeline`: checkpoints, monitors, the contact
+    force), the state at any instant ``state_at(elapsed)``, how it ends early (``stop``) and
+    what runs when it ends normally (``finish``: a grasp, a release).
     """
 
-    kind: Literal["move", "open", "close", "center"]
-    line: int
-    monitors: tuple[MonitorSpec, ...]
-    start_time: float
-    end: float
-    checkpoints: list[Checkpoint]
-    state_at: Callable[[float], MotionState]
-    arrives: bool
+    state_at: Callable[[float], MotionState] = _no_state
     stop: Stop | None = None
-    normal: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
-    lever: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
     finish: Callable[[], None] | None = None
-    cursor: int = 0
-    fired: set[int] = field(default_factory=set)
-    detected: bool = False
 
 
 class MotionObserver(Protocol):
@@ -217,53 +203,6 @@ class MotionObserver(Protocol):
         Called before the machine takes on the state at ``elapsed``; ``motion.state_at`` gives
         every instant up to there.
         """
-
-
-def segment_times(durations: list[float], constraints: Sequence[MotionConstraint]) -> list[float]:
-    """Stretch or squeeze segment times [s] to satisfy ``WITH DURATION`` constraints."""
-    times = list(durations)
-    whole = []
-    for c in constraints:
-        if not isinstance(c, DurationConstraint):
-            continue
-        if c.segment is None:
-            whole.append(c)
-        elif 0 <= c.segment < len(times):
-            times[c.segment] = _apply_duration(times[c.segment], c)
-    total = sum(times)
-    for c in whole:
-        wanted = _apply_duration(total, c)
-        if total > 0 and wanted != total:
-            times = [t * wanted / total for t in times]
-            total = wanted
-        elif total == 0 and wanted > 0 and times:
-            times[-1] = wanted
-            total = wanted
-    return times
-
-
-def _apply_duration(time: float, c: DurationConstraint) -> float:
-    if c.relation in (">", "≥"):
-        return max(time, c.seconds)
-    if c.relation in ("<", "≤"):
-        return min(time, c.seconds)
-    if c.relation == "=":
-        return c.seconds
-    return time
-
-
-def crossing_level(
-    value_per_newton: float, relation: str, threshold: float, stall: float
-) -> float | None:
-    """Smallest force level L ∈ (0, stall] [N] at which ``L·c rel threshold`` holds, or None."""
-    candidates = [1e-9, stall]
-    if value_per_newton != 0.0:
-        exact = threshold / value_per_newton
-        candidates.append(exact + max(abs(exact) * 1e-12, 1e-12))
-    for level in sorted(c for c in candidates if 0.0 < c <= stall):
-        if relation_holds(level * value_per_newton, relation, threshold):  # type: ignore[arg-type]
-            return level
-    return None
 
 
 @dataclass(frozen=True, eq=False)
