@@ -149,6 +149,8 @@ def compare_paths(
 _CHILD = """
 import sys, time
 from pathlib import Path
+import synth
+assert Path(synth.__file__).resolve().parent.parent == Path.cwd().resolve(), synth.__file__
 from synth.replay import build_context, run_trial
 text = Path(sys.argv[1]).read_text(encoding="utf-8")
 context = build_context(text, sys.argv[2])
@@ -167,6 +169,7 @@ def _child_rate(path: Path, n: int, tree: Path) -> tuple[float, float]:
     out = subprocess.run(
         [sys.executable, "-c", _CHILD, str(path), str(SEED), str(n)],
         env=env,
+        cwd=tree,  # `python -c` puts the working directory first on sys.path
         capture_output=True,
         text=True,
         check=True,

@@ -47,6 +47,13 @@ def random_segment(rng: np.random.Generator, limits, spread: float) -> Segment: 
     return Segment(q0, q1, random_error(rng, 2e-3), random_error(rng, 2e-3), 0.0, 1.0)
 
 
+def pin_setup(cell):  # type: ignore[no-untyped-def]
+    """The context, the arm's chain and the pin's vertices (pin frame, columns)."""
+    context, machine = cell
+    state = next(iter(machine.pins.values()))
+    return context, ArmChain.of(context.arm), pin_points(state.model)
+
+
 def test_safe_step_is_the_quadratics_root() -> None:
     # gap − r·τ − ½Aτ² = 0 at τ = (−r + √(r² + 2Ag))/A
     for gap, rate, curvature in [(0.01, 0.07, 0.05), (0.002, -0.03, 0.4), (0.5, 1.2, 2.7)]:
@@ -61,10 +68,7 @@ def test_the_pins_points_move_no_faster_than_its_bound(cell) -> None:  # type: i
     # every vertex of the pin, at 40 instants of 200 random segments, against the motion
     # sampled with Pinocchio: displacement over h ≤ h·V(s) + ½Ah², and along random unit
     # directions n, −n·(displacement) ≤ h·a(n) + ½Ah² (the approach rate)
-    context, machine = cell
-    chain = ArmChain.of(context.arm)
-    state = next(iter(machine.pins.values()))
-    points = pin_points(state.model)
+    context, chain, points = pin_setup(cell)
     rng = np.random.default_rng(1)
     worst = worst_along = -np.inf
     tightest = np.inf
@@ -96,10 +100,7 @@ def test_the_pins_points_move_no_faster_than_its_bound(cell) -> None:  # type: i
 
 def test_the_pins_second_derivative_is_within_its_curvature(cell) -> None:  # type: ignore[no-untyped-def]
     # central second differences of the vertices' positions, step 1e-3, against A
-    context, machine = cell
-    chain = ArmChain.of(context.arm)
-    state = next(iter(machine.pins.values()))
-    points = pin_points(state.model)
+    context, chain, points = pin_setup(cell)
     rng = np.random.default_rng(2)
     ratio = 0.0
     for _ in range(100):

@@ -367,28 +367,36 @@ def safe_steps(
     return np.where(gaps > 0.0, steps, 0.0)
 
 
-_PREPARED: list[tuple[object, object, object, tuple[object, ...]]] = []
+_PREPARED: dict[tuple[object, ...], tuple[object, ...]] = {}
 
 
 def _prepared(
     pin_model: PinModel, obstacles: Sequence[Obstacle], holes: Sequence[HoleSite]
 ) -> tuple[_Pin, list[_Target], _Field, _Mouths, NDArray[np.float64]]:
-    """The pin, targets, bounds and mouths of a search, kept for the next one.
+    """The pin, targets, bounds and mouths of a search, kept for the next ones.
 
-    A motion's segments and phases search for the same pin among the same obstacles (the
-    same list object) and holes: they are made once for it.
+    A trial's searches look for the same pin among the same solids at the same poses (a free
+    pin moves only when it is carried): they are made once per pin, holes and placed solids
+    (the last few kept, keyed by the solids' names, shapes and poses).
     """
-    if _PREPARED:
-        model, seen, mouths_of, prepared = _PREPARED[0]
-        if model is pin_model and seen is obstacles and mouths_of is holes:
-            return prepared  # type: ignore[return-value]
+    key = (
+        id(pin_model),
+        id(holes),
+        tuple((o.name, id(o.geometry), o.pose.homogeneous.tobytes()) for o in obstacles),
+    )
+    cached = _PREPARED.get(key)
+    if cached is not None and cached[0] is pin_model and cached[1] is holes:
+        return cached[2]  # type: ignore[return-value]
     pin_ = _Pin(pin_model)
     targets = [_Target(o) for o in obstacles]
     field = _Field(pin_, targets, pin_points(pin_model))
     mouths = _Mouths(holes)
     radii = np.array([h.mouth_radius for h in holes])
-    _PREPARED[:] = [(pin_model, obstacles, holes, (pin_, targets, field, mouths, radii))]
-    return pin_, targets, field, mouths, radii
+    while len(_PREPARED) >= 4:
+        _PREPARED.pop(next(iter(_PREPARED)))
+    prepared = (pin_, targets, field, mouths, radii)
+    _PREPARED[key] = (pin_model, holes, prepared)
+    return prepared
 
 
 def _first_contact_flight(
@@ -744,14 +752,7 @@ def guided_motion(
     bottom = seat if depth0 < seat else depth0 + 1e-9
 
     def event(s: float) -> Literal["bottom", "exit", "jam"] | None:
-        depth, lateral = state(s)
-        if depth >= bottom:
-            return "bottom"
-        if lateral > compliance:
-            return "jam"
-        if depth <= -exit_margin:
-            return "exit"
-        return None
+        return _guided_event(*state(s), bottom, compliance, exit_margin)
 
     previous = start
     for s in np.linspace(start, end, max(samples, 2))[1:]:
@@ -771,6 +772,23 @@ def guided_motion(
         return GuidedEnd(hi, kind, min(max(depth, 0.0), seat), lateral)
     depth, lateral = state(end)
     return GuidedEnd(end, "end", min(max(depth, 0.0), seat), lateral)
+
+
+def _guided_event(
+    depth: float, lateral: float, bottom: float, compliance: float, exit_margin: float
+) -> Literal["bottom", "exit", "jam"] | None:
+    """What ends a guided phase with the tip ``depth`` [m] in and ``lateral`` [m] off the axis.
+
+    It bottoms at ``bottom``, jams past ``compliance`` sideways, leaves ``exit_margin`` above
+    the mouth; None while none holds.
+    """
+    if depth >= bottom:
+        return "bottom"
+    if lateral > compliance:
+        return "jam"
+    if depth <= -exit_margin:
+        return "exit"
+    return None
 
 
 def _guided_flight(
@@ -793,13 +811,7 @@ def _guided_flight(
         return -along, math.sqrt(float(radial @ radial))
 
     def kind(depth: float, lateral: float) -> Literal["bottom", "exit", "jam"] | None:
-        if depth >= bottom:
-            return "bottom"
-        if lateral > compliance:
-            return "jam"
-        if depth <= -exit_margin:
-            return "exit"
-        return None
+        return _guided_event(depth, lateral, bottom, compliance, exit_margin)
 
     def margin(depth: float, lateral: float) -> float:
         return min(bottom - depth, compliance - lateral, depth + exit_margin)
