@@ -1,7 +1,7 @@
 """Time the referee: AL parsing, the nominal replay, Monte Carlo trials, fast against reference.
 
 Usage: python benchmarks/replay.py [--trials N] [--repeat N] [--fast-trials N]
-                                   [--reference-trials N] [--only-ratio]
+                                   [--reference-trials N] [--only-ratio] [--baseline DIR]
 Prints a table: parse time per kB of AL (the seed's search listing), the nominal replay of the
 search and first-cut programs on seed_4_8 (median of ``--repeat`` runs), and Monte Carlo trials
 per second on 1 and 2 worker processes (``--trials`` trials each), net of the set-up a run with
@@ -10,24 +10,32 @@ as many trials as workers takes (parsing, the arm and meshes, the nominal run, s
 **Fast against reference.** For the seed's search listing and synth's own program
 (fixtures/golden/seed_4_8.al), trials 0, 1, … of seed 0 run in this process on the fast path
 (``--fast-trials``) and on the reference path, ``ReplayOptions(reference=True)``: every pair and
-target measured at every step, scenes rebuilt (``--reference-trials``, the first of the same
-trials). Printed per path: trials/s, µs per motion (per MOVE), µs per distance query and the
-queries per trial (Coal distances: pin–obstacle and arm/hand pairs, counted in a separate,
-untimed pass), and the ratio of the two rates; the outcomes of the shared trials are checked
-to agree.
+target measured at every step of a global-Lipschitz advancement, scenes rebuilt
+(``--reference-trials``, the first of the same trials; the reference path is today's main's,
+unchanged). Printed per path: trials/s (wall and CPU: the machine may be shared), µs per motion
+(per MOVE), µs per contact query and the queries per trial (Coal's distance queries, each pair
+of a scene-wide query counted: :class:`Counts`, in a separate, untimed pass), and the ratio of
+the two rates; the outcomes of the shared trials are checked to agree.
+
+**Against a checkout.** ``--baseline DIR`` (a checkout of today's main, say ``git worktree add
+/tmp/main main``) times the same trials of its default path in a subprocess with
+``PYTHONPATH=DIR``, alternating with this tree's, and prints both rates and their ratio.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
+import subprocess
+import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
 
+import coal
+import pinocchio as pin
 from _timing import per_call_us
 
-import synth.models.arm.collision as collision
-import synth.replay.contact as contact
 import synth.replay.machine as machine
 from synth.al.parser import parse_program
 from synth.replay import ReplayOptions, build_context, replay, run_nominal, run_trial
@@ -42,7 +50,12 @@ PROGRAMS = {
 
 
 class Counts:
-    """Motions and Coal distance queries, counted by wrapping the functions that make them."""
+    """Motions and Coal distance queries, counted by wrapping the functions that make them.
+
+    ``pinocchio.computeDistance`` counts one, ``pinocchio.computeDistances`` one per pair of
+    the geometry model, ``coal.distance`` one: every distance query of either path goes
+    through one of them.
+    """
 
     def __init__(self) -> None:
         self.motions = 0
@@ -60,14 +73,13 @@ class Counts:
         setattr(owner, name, counted)
 
     def __enter__(self) -> Counts:
-        self._wrap(contact._Pin, "distance", lambda *a, **k: 1)
-        self._wrap(contact._Pin, "gap", lambda *a, **k: 1)
-        self._wrap(collision.CollisionScene, "measure", lambda *a, **k: 1)
+        self._wrap(pin, "computeDistance", lambda *a, **k: 1)
         self._wrap(
-            collision.CollisionScene,
-            "distance_bounds",
-            lambda scene, *a, **k: len(scene.pairs),
+            pin,
+            "computeDistances",
+            lambda *a, **k: len(a[2].collisionPairs) if len(a) > 2 else 1,
         )
+        self._wrap(coal, "distance", lambda *a, **k: 1)
         original_move = machine.ReplayMachine.move
         self._saved.append((machine.ReplayMachine, "move", original_move))
 
@@ -83,6 +95,16 @@ class Counts:
             setattr(owner, name, original)
 
 
+def timed_trials(text: str, reference: bool, n: int) -> tuple[float, float, list[tuple]]:
+    """Wall and CPU seconds of trials 0 … n−1 of seed 0, and their outcomes."""
+    context = build_context(text, SEED, options=ReplayOptions(reference=reference))
+    run_trial(context, 0, 0)  # warm: meshes, hulls, caches
+    wall, cpu = time.perf_counter(), time.process_time()
+    runs = [run_trial(context, 0, i) for i in range(n)]
+    wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+    return wall, cpu, [(r.outcome, r.line, r.message) for r in runs]
+
+
 def compare_paths(
     name: str, text: str, fast_n: int, reference_n: int
 ) -> list[tuple[str, str, str]]:
@@ -92,35 +114,88 @@ def compare_paths(
     outcomes = {}
     for label, reference, n in (("fast", False, fast_n), ("reference", True, reference_n)):
         context = build_context(text, SEED, options=ReplayOptions(reference=reference))
-        run_trial(context, 0, 0)  # warm: meshes, hulls, caches
+        run_trial(context, 0, 0)
         with Counts() as counts:
             for i in range(min(n, 3)):
                 run_trial(context, 0, i)
         per_trial = (counts.motions / min(n, 3), counts.queries / min(n, 3))
-        start = time.perf_counter()
-        runs = [run_trial(context, 0, i) for i in range(n)]
-        wall = time.perf_counter() - start
-        outcomes[label] = [(r.outcome, r.line, r.message) for r in runs]
-        rates[label] = n / wall
+        wall, cpu, outcomes[label] = timed_trials(text, reference, n)
+        rates[label] = (n / wall, n / cpu)
         trial_us = 1e6 * wall / n
         rows.append(
             (
                 f"{label} path ({name}, 1 process)",
-                f"{rates[label]:,.2f} trials/s",
-                f"{n} trials; {trial_us / per_trial[0]:,.0f} µs per motion, "
-                f"{trial_us / per_trial[1]:,.1f} µs per distance query, "
+                f"{rates[label][0]:,.2f} trials/s",
+                f"{n} trials ({rates[label][1]:,.2f}/s of CPU); {trial_us / per_trial[0]:,.0f} µs "
+                f"per motion, {trial_us / per_trial[1]:,.1f} µs per contact query, "
                 f"{per_trial[1]:,.0f} queries per trial",
             )
         )
     shared = min(fast_n, reference_n)
-    agree = outcomes["fast"][:shared] == outcomes["reference"][:shared]
+    agree = [a[0] for a in outcomes["fast"][:shared]] == [
+        b[0] for b in outcomes["reference"][:shared]
+    ]
     rows.append(
         (
             f"fast / reference ({name})",
-            f"{rates['fast'] / rates['reference']:,.2f}×",
-            f"outcomes of the {shared} shared trials {'agree' if agree else 'DIFFER'}",
+            f"{rates['fast'][0] / rates['reference'][0]:,.2f}×",
+            f"CPU {rates['fast'][1] / rates['reference'][1]:,.2f}×; outcomes of the {shared} "
+            f"shared trials {'agree' if agree else 'DIFFER'}",
         )
     )
+    return rows
+
+
+_CHILD = """
+import sys, time
+from pathlib import Path
+import synth
+assert Path(synth.__file__).resolve().parent.parent == Path.cwd().resolve(), synth.__file__
+from synth.replay import build_context, run_trial
+text = Path(sys.argv[1]).read_text(encoding="utf-8")
+context = build_context(text, sys.argv[2])
+run_trial(context, 0, 0)
+n = int(sys.argv[3])
+wall, cpu = time.perf_counter(), time.process_time()
+for i in range(n):
+    run_trial(context, 0, i)
+print(time.perf_counter() - wall, time.process_time() - cpu)
+"""
+
+
+def _child_rate(path: Path, n: int, tree: Path) -> tuple[float, float]:
+    """Trials/s (wall, CPU) of ``tree``'s default path in a subprocess."""
+    env = dict(os.environ, PYTHONPATH=str(tree))
+    out = subprocess.run(
+        [sys.executable, "-c", _CHILD, str(path), str(SEED), str(n)],
+        env=env,
+        cwd=tree,  # `python -c` puts the working directory first on sys.path
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout.split()
+    return n / float(out[0]), n / float(out[1])
+
+
+def against_baseline(baseline: Path, n: int, rounds: int = 2) -> list[tuple[str, str, str]]:
+    """Rows of this tree's default path against ``baseline``'s, alternating subprocesses."""
+    rows = []
+    for name, path in PROGRAMS.items():
+        ours, theirs = [], []
+        for _ in range(rounds):
+            theirs.append(_child_rate(path, n, baseline))
+            ours.append(_child_rate(path, n, ROOT))
+        mine = (sum(r[0] for r in ours) / rounds, sum(r[1] for r in ours) / rounds)
+        base = (sum(r[0] for r in theirs) / rounds, sum(r[1] for r in theirs) / rounds)
+        rows.append(
+            (
+                f"this tree / {baseline.name} ({name})",
+                f"{mine[0] / base[0]:,.2f}×",
+                f"{mine[0]:,.2f} against {base[0]:,.2f} trials/s wall, {mine[1]:,.2f} against "
+                f"{base[1]:,.2f} of CPU ({mine[1] / base[1]:,.2f}×); {n} trials, {rounds} rounds "
+                f"alternated",
+            )
+        )
     return rows
 
 
@@ -135,12 +210,17 @@ def main() -> None:
     parser.add_argument(
         "--only-ratio", action="store_true", help="print the fast/reference rows only"
     )
+    parser.add_argument(
+        "--baseline", type=Path, default=None, help="a checkout to time this tree against"
+    )
     args = parser.parse_args()
 
     rows: list[tuple[str, str, str]] = []
     for name, path in PROGRAMS.items():
         text = path.read_text(encoding="utf-8")
         rows += compare_paths(name, text, args.fast_trials, args.reference_trials)
+    if args.baseline is not None:
+        rows += against_baseline(args.baseline.resolve(), args.fast_trials)
     if args.only_ratio:
         print_rows(rows)
         return

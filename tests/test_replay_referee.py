@@ -19,13 +19,20 @@ fixtures/golden/seed_4_8.al            1     success 200
 The fast path must give the same counts (seed 1 runs with ``-m slow`` or SYNTH_SLOW=1).
 
 **Fast against reference.** ``ReplayOptions(reference=True)`` measures every pair and target at
-every step; the fast path measures only what its Lipschitz lower bounds cannot rule out and
-drops joints that cannot change a pair's distance, so its proven steps are longer and fall
-elsewhere. A sweep stops at the first step where a pair is inside the clearance band (1 mm for
-the arm, 20 µm for the pin), and the two step sequences reach that band at different points of
-it; Coal's GJK also caches its last guess per pair, so the order of queries moves distances by
-up to its tolerance (≈ 1 µm). Trial times therefore agree within 2 ms (measured: 0.6 ms at
-most), outcomes, lines, messages and statement counts exactly.
+every step of a conservative advancement with one Lipschitz constant per segment; the fast path
+bounds each step by the motion at its start plus a second-order remainder, measures only what
+can decide it (:mod:`synth.replay.bounds`, :mod:`synth.replay.advance`) and so takes far fewer,
+longer steps. A stop lies anywhere in the contact band — the fast path's between half the
+clearance and the clearance, the reference's anywhere within it (1 mm for the arm and hand,
+20 µm for the pin) — so the two stop at different points of it, and the next motion starts
+there. Against the runs recorded on main (both programs, seeds 0 and 1, 200 trials each, 800
+in all) every outcome is the same; 799 trials also run the same statements, with times within
+18 ms; in one (seed 0, trial 101 of the search listing) the fingers come to rest a few tenths
+of a millimetre apart on the two paths, and a later search point's pass grazes the box within
+the clearance on main's path and just outside it on the fast one: the same abort, one search
+point earlier.
+Here trials 0, 1, 2 and 18 must agree in outcome, line, message and statements, and their
+times within 25 ms.
 
 **Trial 18 of seed 0** of the search listing aborts (its box lies −0.73 cm off in x: a search
 point falls beside it); the diagnostics are checked on it, its sampled errors against
@@ -107,7 +114,7 @@ def test_fast_path_runs_are_the_reference_runs(program: Path, indices: tuple[int
             b.message,
             b.statements,
         )
-        assert a.time == pytest.approx(b.time, abs=2e-3)
+        assert a.time == pytest.approx(b.time, abs=25e-3)
     if program == SEARCH:
         assert run_trial(fast, 0, 18).outcome == "abort"  # a failing trial is among them
 

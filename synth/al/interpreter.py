@@ -99,6 +99,7 @@ from __future__ import annotations
 import itertools
 import math
 import time
+import weakref
 from collections.abc import Callable, Generator, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any, cast
@@ -147,6 +148,23 @@ from synth.al.values import (
     unary,
 )
 from synth.exceptions import ALRuntimeError
+
+_DEPTHS: dict[int, tuple[weakref.ref[ast.Program], ast.Node | None]] = {}
+
+
+def _too_deep(program: ast.Program) -> ast.Node | None:
+    """:func:`ast.too_deep` of ``program``, walked once per program object.
+
+    A replay runs one program thousands of times, and the tree is immutable.
+    """
+    cached = _DEPTHS.get(id(program))
+    if cached is not None and cached[0]() is program:
+        return cached[1]
+    deep = ast.too_deep(program)
+    key = id(program)
+    _DEPTHS[key] = (weakref.ref(program, lambda _: _DEPTHS.pop(key, None)), deep)
+    return deep
+
 
 __all__ = [
     "HAND_NAMES",
@@ -383,7 +401,7 @@ class Interpreter:
     def run(self, program: ast.Program) -> RunResult:
         """Execute ``program``; returns its outcome, raises ALRuntimeError for a faulty one."""
         self._filename = program.filename
-        deep = ast.too_deep(program)
+        deep = _too_deep(program)
         if deep is not None:
             raise self._error(deep, f"nested more than {ast.MAX_NESTING} levels deep")
         start = self._statements

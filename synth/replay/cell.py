@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 from synth.al.interpreter import MAX_STATEMENTS, MAX_TIME, MAX_WALL_TIME
 from synth.models.arm import JIFFY, Arm, Obstacle, SweepOptions
 from synth.models.workcell import HoleSite, PinModel, Workcell
+from synth.replay.bounds import PinExtent
 from synth.replay.capture import inserted_depth
 from synth.replay.motion import MotionState
 from synth.replay.reach import ReachProblem, solve_near
@@ -100,6 +101,9 @@ class PinState:
     hole: HoleSite | None = None
     depth: float = 0.0
     rests_on: str | None = None
+    extent: PinExtent | None = None
+    """How far the held pin's points reach for its grip (the fast path's bounds; None: not
+    yet computed)."""
 
     @property
     def held(self) -> bool:

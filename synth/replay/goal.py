@@ -2,7 +2,8 @@
 
 :func:`goal_verdict` holds when the insertion's pin is not held, stands in the target hole at
 its seated depth (within ``seat_tolerance``, :func:`~synth.replay.capture.seat_depth`), and no
-palm or finger is within ``clear_distance`` of it (Coal distances at the arm's configuration).
+palm or finger is within ``clear_distance`` of it (Coal distances at the arm's configuration,
+of those pairs only).
 Otherwise it says why not.
 """
 
@@ -17,6 +18,7 @@ from synth.models.arm import HAND_BODIES, CollisionScene
 from synth.models.workcell import HoleSite
 from synth.replay.capture import seat_depth
 from synth.replay.cell import PinState, ReplayOptions
+from synth.replay.sweeps import pair_distances
 
 __all__ = ["goal_verdict"]
 
@@ -48,12 +50,12 @@ def goal_verdict(
             f"(seated: {100 * seat:.2f} cm)"
         )
     cell = scene()
-    distances = cell.distances(q)
-    near = [
-        d
-        for (a, b), d in zip(cell.pairs, distances, strict=True)
+    pairs = [
+        k
+        for k, (a, b) in enumerate(cell.pairs)
         if name in (a, b) and (a in HAND_BODIES or b in HAND_BODIES)
     ]
+    near = pair_distances(cell, q, pairs)
     if near and min(near) < options.clear_distance:
         return False, f"the hand is not clear of {name} ({100 * min(near):.2f} cm)"
     return True, f"{name} seated in {target.name}"

@@ -40,6 +40,7 @@ from synth.replay.capture import seat_depth, seated_pose
 from synth.replay.cell import PinState
 from synth.replay.motion import Motion, MotionState
 from synth.replay.reach import ReachProblem, solve_near
+from synth.replay.sweeps import pair_collisions
 
 __all__ = ["finger_collision", "grasp", "grasp_candidate", "hand_motion", "release"]
 
@@ -133,7 +134,6 @@ def release(state: PinState) -> None:
 
 def finger_collision(scene: CollisionScene, q: NDArray[np.float64]) -> tuple[str, str] | None:
     """The first pair in contact at ``q`` with a palm or finger in it, if any."""
-    for a, b in scene.collisions(q):
-        if a in HAND_BODIES or b in HAND_BODIES:
-            return a, b
-    return None
+    hand = [k for k, (a, b) in enumerate(scene.pairs) if a in HAND_BODIES or b in HAND_BODIES]
+    hits = pair_collisions(scene, q, hand)
+    return hits[0] if hits else None

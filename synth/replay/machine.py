@@ -96,6 +96,7 @@ from synth.models.arm import (
 )
 from synth.models.arm.collision import SceneCache
 from synth.models.workcell import Workcell
+from synth.replay.bounds import ArmChain
 from synth.replay.capture import seat_depth, seated_pose, tip_placement
 from synth.replay.cell import (
     PinState,
@@ -156,6 +157,7 @@ class ReplayMachine(TimelineMachine[Motion]):
         self._motion: Motion | None = None
         self._scene: CollisionScene | None = None
         self.observer: MotionObserver | None = None
+        self._chain = ArmChain.of(arm)
 
     # ---- sensors
 
@@ -320,9 +322,11 @@ class ReplayMachine(TimelineMachine[Motion]):
         """Walk the segments: pin contacts, guidance and arm sweeps; the motion's timeline."""
         scene = self.scene()
         obstacles = self._obstacles()
-        walking = WalkContext(self.arm, self.workcell, self.options, obstacles, line, self._time)
+        walking = WalkContext(
+            self.arm, self.workcell, self.options, obstacles, line, self._time, self._chain
+        )
         sweeping = SweepContext(
-            self.arm, self.options, {o.name for o in obstacles}, line, self._time
+            self.arm, self.options, {o.name for o in obstacles}, line, self._time, self._chain
         )
         hole = held.hole if held is not None else None
         slide: Slide | None = None

@@ -37,12 +37,21 @@ from synth.models.arm import (
     swept_segment,
 )
 from synth.models.arm.sweep import LAZY_SLACK
+from synth.replay.advance import fast_sweep
+from synth.replay.bounds import ArmChain
 from synth.replay.cell import ReplayOptions
 from synth.replay.motion import Segment, Stop, push_reaction
 from synth.replay.reach import describe_pose
 from synth.replay.report import Violation
 
-__all__ = ["SweepContext", "pair_contact", "sweep_options", "sweep_segment"]
+__all__ = [
+    "SweepContext",
+    "pair_collisions",
+    "pair_contact",
+    "pair_distances",
+    "sweep_options",
+    "sweep_segment",
+]
 
 
 @dataclass(frozen=True)
@@ -50,7 +59,8 @@ class SweepContext:
     """What the sweeps of one motion need: the arm, the settings and the motion's facts.
 
     ``obstacles``: the names of the workcell's solids and free pins (what a hand body can
-    touch); ``line``: the motion's AL line; ``start_time`` [s]: the clock when it started.
+    touch); ``line``: the motion's AL line; ``start_time`` [s]: the clock when it started;
+    ``chain``: the arm's chain for the fast path's motion bounds.
     """
 
     arm: Arm
@@ -58,6 +68,7 @@ class SweepContext:
     obstacles: Collection[str]
     line: int
     start_time: float
+    chain: ArmChain
 
 
 def sweep_options(
@@ -98,8 +109,7 @@ def sweep_segment(
     """
     start = 0.0
     while start < limit:
-        options = sweep_options(context.options, scene, seg.q(start))
-        sweep = swept_segment(scene, seg.q(start), seg.q(limit), options)
+        sweep = _swept(context, scene, seg.q(start), seg.q(limit))
         if sweep.free:
             return None
         s_hit = start + sweep.s * (limit - start)
@@ -114,12 +124,7 @@ def sweep_segment(
             allowed=[*scene.allowed, pair],
             opening=scene.opening,
         )
-        inner = swept_segment(
-            relaxed,
-            seg.q(s_hit),
-            seg.q(s_free),
-            sweep_options(context.options, relaxed, seg.q(s_hit)),
-        )
+        inner = _swept(context, relaxed, seg.q(s_hit), seg.q(s_free))
         if not inner.free:
             s_in = s_hit + inner.s * (s_free - s_hit)
             found = _sweep_stop(context, relaxed, seg, s_hit, s_in, s_free, inner, slide=False)
@@ -127,6 +132,19 @@ def sweep_segment(
             return found
         start = s_free
     return None
+
+
+def _swept(
+    context: SweepContext, scene: CollisionScene, q0: NDArray[np.float64], q1: NDArray[np.float64]
+) -> SweepResult:
+    """The swept check of q0 → q1, its clearance halved below a contact it starts in.
+
+    The reference path's (:func:`sweep_options`, :func:`~synth.models.arm.swept_segment`) or
+    the fast path's (:func:`~synth.replay.advance.fast_sweep`).
+    """
+    if context.options.reference:
+        return swept_segment(scene, q0, q1, sweep_options(context.options, scene, q0))
+    return fast_sweep(scene, context.chain, q0, q1, context.options.sweep)
 
 
 def _sweep_stop(
@@ -185,6 +203,36 @@ def _sweep_stop(
             return limit, (a, b)
     s_stop = _back_off(options, scene, seg, start, s_hit, k)
     return Stop(s_stop, "surface", a, b, point, reaction, note=note)
+
+
+def pair_distances(scene: CollisionScene, q: NDArray[np.float64], pairs: list[int]) -> list[float]:
+    """Exact distances [m] of the scene's ``pairs`` at ``q`` (meshes themselves)."""
+    if not pairs:
+        return []
+    pin.updateGeometryPlacements(
+        scene.model, scene.data, scene.geometry_model, scene.geometry_data, q
+    )
+    out = []
+    for k in pairs:
+        pin.computeDistance(scene.geometry_model, scene.geometry_data, k)
+        out.append(float(scene.geometry_data.distanceResults[k].min_distance))
+    return out
+
+
+def pair_collisions(
+    scene: CollisionScene, q: NDArray[np.float64], pairs: list[int]
+) -> list[tuple[str, str]]:
+    """Those of the scene's ``pairs`` in contact at ``q``, in order."""
+    if not pairs:
+        return []
+    pin.updateGeometryPlacements(
+        scene.model, scene.data, scene.geometry_model, scene.geometry_data, q
+    )
+    return [
+        scene.pairs[k]
+        for k in pairs
+        if pin.computeCollision(scene.geometry_model, scene.geometry_data, k)
+    ]
 
 
 def pair_distance(scene: CollisionScene, q: NDArray[np.float64], k: int) -> float:

@@ -33,9 +33,10 @@ from synth.models.arm import Arm, JointLimits, Obstacle
 from synth.models.arm.bodies import Body
 from synth.models.arm.sweep import body_motion_bounds
 from synth.models.workcell import HoleSite, Workcell
+from synth.replay.bounds import ArmChain, PinExtent, PinFlight
 from synth.replay.capture import seat_depth, seated_pose, tip_placement
 from synth.replay.cell import PinState, ReplayOptions
-from synth.replay.contact import PoseAt, first_contact, guided_motion, scrape
+from synth.replay.contact import PoseAt, first_contact, guided_motion, pin_points, scrape
 from synth.replay.motion import Phase, Segment, Slide, Stop, point_on, push_reaction
 from synth.replay.report import Violation
 from synth.replay.wedging import wedging_onset
@@ -48,7 +49,8 @@ class WalkContext:
     """What the walk of one motion needs: the arm, the true workcell and the motion's facts.
 
     ``obstacles``: what the held pin can touch (the static solids and the free pins);
-    ``line``: the motion's AL line; ``start_time`` [s]: the clock when the motion started.
+    ``line``: the motion's AL line; ``start_time`` [s]: the clock when the motion started;
+    ``chain``: the arm's chain for the fast path's motion bounds.
     """
 
     arm: Arm
@@ -57,6 +59,7 @@ class WalkContext:
     obstacles: Sequence[Obstacle]
     line: int
     start_time: float
+    chain: ArmChain
 
 
 @dataclass(frozen=True)
@@ -128,6 +131,16 @@ def pin_speed(arm: Arm, state: PinState, segment: Segment) -> float:
     return float((rho + margin) @ dq) + blend
 
 
+def _extent(chain: ArmChain, held: PinState) -> PinExtent:
+    """The held pin's :class:`PinExtent`, kept on the pin while its grip stays the same."""
+    assert held.grip is not None
+    extent = held.extent
+    if extent is None or extent.grip is not held.grip:
+        extent = PinExtent.of(chain, held.grip, pin_points(held.model))
+        held.extent = extent
+    return extent
+
+
 def _violation(context: WalkContext, kind: str, detail: str, seg: Segment, s: float) -> Violation:
     return Violation(kind, context.line, detail, context.start_time + seg.time(s))  # type: ignore[arg-type]
 
@@ -168,7 +181,17 @@ def walk_segment(
     grip = held.grip
     assert grip is not None
     commanded = commanded_pose(context.arm, seg, grip)
-    speed = pin_speed(context.arm, held, seg)
+    speeds: list[float] = []
+
+    def speed() -> float:
+        """:func:`pin_speed` of this segment (the reference's search and the slide's steps)."""
+        if not speeds:
+            speeds.append(pin_speed(context.arm, held, seg))
+        return speeds[0]
+
+    flight = None
+    if not options.reference:
+        flight = PinFlight(context.chain, seg, _extent(context.chain, held))
     while s < 1.0 and pin_stop is None:
         if hole is not None:
             end = guided_motion(
@@ -178,6 +201,7 @@ def walk_segment(
                 start=s,
                 compliance=options.compliance,
                 exit_margin=options.exit_margin,
+                flight=flight,
             )
             if end.kind == "exit":
                 hole, s = None, end.s
@@ -200,7 +224,7 @@ def walk_segment(
             slid = scrape(
                 held.model,
                 commanded,
-                speed,
+                speed(),
                 current.obstacle,
                 current.normal,
                 current.pin_point,
@@ -229,13 +253,13 @@ def walk_segment(
         found = first_contact(
             held.model,
             commanded,
-            speed,
+            speed() if flight is None else 0.0,
             obstacles,
             context.workcell.holes,
             start=s,
             clearance=options.contact_clearance,
             friction=context.workcell.friction,
-            reference=options.reference,
+            flight=flight,
         )
         if found is None:
             s = 1.0
