@@ -16,7 +16,7 @@ fixtures/golden/seed_4_8.al            0     success 199, abort 1
 fixtures/golden/seed_4_8.al            1     success 200
 =====================================  ====  ==========================
 
-The fast path must give the same counts (seed 1 runs with ``-m slow`` or SYNTH_SLOW=1).
+The fast path must give the same counts (seed 1 runs in ``make test-slow``).
 
 **Fast against reference.** ``ReplayOptions(reference=True)`` measures every pair and target at
 every step of a conservative advancement with one Lipschitz constant per segment; the fast path
@@ -44,7 +44,6 @@ from __future__ import annotations
 import io
 import json
 import math
-import os
 import signal
 import subprocess
 import sys
@@ -74,10 +73,6 @@ RECORDED = {
 }
 
 
-def slow_selected(config: pytest.Config) -> bool:
-    return "slow" in (config.getoption("-m") or "") or bool(os.environ.get("SYNTH_SLOW"))
-
-
 @pytest.mark.parametrize(
     ("program", "seed"),
     [
@@ -88,11 +83,7 @@ def slow_selected(config: pytest.Config) -> bool:
     ],
     ids=["search-0", "golden-0", "search-1", "golden-1"],
 )
-def test_outcome_counts_are_the_recorded_ones(
-    request: pytest.FixtureRequest, program: Path, seed: int
-) -> None:
-    if seed == 1 and not slow_selected(request.config):
-        pytest.skip("the seed-1 recordings: run with -m slow or SYNTH_SLOW=1")
+def test_outcome_counts_are_the_recorded_ones(program: Path, seed: int) -> None:
     report = replay(
         program.read_text(encoding="utf-8"), SEED_TASK, trials=200, seed=seed, workers=2
     )
