@@ -38,7 +38,7 @@ from _timing import per_call_us
 
 import synth.replay.machine as machine
 from synth.al.parser import parse_program
-from synth.replay import ReplayOptions, build_context, replay, run_nominal, run_trial
+from synth.replay import ReplayOptions, replay_context, replay_program, run_nominal, run_trial
 
 ROOT = Path(__file__).resolve().parent.parent
 DATA = ROOT / "tests" / "data" / "al"
@@ -97,7 +97,7 @@ class Counts:
 
 def timed_trials(text: str, reference: bool, n: int) -> tuple[float, float, list[tuple]]:
     """Wall and CPU seconds of trials 0 … n−1 of seed 0, and their outcomes."""
-    context = build_context(text, SEED, options=ReplayOptions(reference=reference))
+    context = replay_context(text, SEED, options=ReplayOptions(reference=reference))
     run_trial(context, 0, 0)  # warm: meshes, hulls, caches
     wall, cpu = time.perf_counter(), time.process_time()
     runs = [run_trial(context, 0, i) for i in range(n)]
@@ -113,7 +113,7 @@ def compare_paths(
     rates = {}
     outcomes = {}
     for label, reference, n in (("fast", False, fast_n), ("reference", True, reference_n)):
-        context = build_context(text, SEED, options=ReplayOptions(reference=reference))
+        context = replay_context(text, SEED, options=ReplayOptions(reference=reference))
         run_trial(context, 0, 0)
         with Counts() as counts:
             for i in range(min(n, 3)):
@@ -231,7 +231,7 @@ def main() -> None:
 
     for name in ("seed_4_8_search.al", "seed_4_8_first_cut.al"):
         text = (DATA / name).read_text(encoding="utf-8")
-        context = build_context(text, SEED, filename=name)
+        context = replay_context(text, SEED, filename=name)
         outcome = run_nominal(context)
         us = per_call_us(lambda context=context: run_nominal(context), args.repeat)
         rows.append(
@@ -246,10 +246,10 @@ def main() -> None:
         text = (DATA / name).read_text(encoding="utf-8")
         for workers in (1, 2):
             start = time.perf_counter()
-            replay(text, SEED, trials=workers, seed=0, workers=workers)
+            replay_program(text, SEED, trials=workers, seed=0, workers=workers)
             overhead = time.perf_counter() - start  # parse, build, nominal run, start workers
             start = time.perf_counter()
-            report = replay(text, SEED, trials=args.trials, seed=0, workers=workers)
+            report = replay_program(text, SEED, trials=args.trials, seed=0, workers=workers)
             wall = time.perf_counter() - start
             steady = (args.trials - workers) / max(wall - overhead, 1e-9)
             rate = report.monte_carlo.success_rate or 0.0

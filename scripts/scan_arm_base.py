@@ -63,7 +63,7 @@ from synth.models.graph import AttributeGraph, pose_to_se3  # noqa: E402
 from synth.models.loader import load_task, validate_task  # noqa: E402
 from synth.models.spec import Pose, TaskSpec  # noqa: E402
 from synth.pipeline import SynthesisOptions, synthesize  # noqa: E402
-from synth.replay import replay  # noqa: E402
+from synth.replay import replay_program  # noqa: E402
 from synth.replay.proof import ProofOptions  # noqa: E402
 from synth.units import CM, DEG, INCH  # noqa: E402
 
@@ -165,7 +165,7 @@ def replays(x: float, y: float, yaw: float, arm_model: str = "stanford") -> dict
         for task, listing in LISTINGS if stanford else ():
             spec = with_base(load_task(TASKS_DIR / f"{task}.yaml"), x, y, yaw)
             text = (LISTINGS_DIR / listing).read_text(encoding="utf-8")
-            run = replay(text, spec, filename=listing, base_dir=TASKS_DIR).nominal
+            run = replay_program(text, spec, filename=listing, base_dir=TASKS_DIR).nominal
             if run.outcome != "success":
                 out["failure"] = f"{listing}: {run.outcome} at line {run.line}: {run.message}"
                 return out

@@ -49,10 +49,10 @@ def plan_svg_job(
 def _trace(
     program: str, spec_body: str, kind: SpecKind, model_dirs: tuple[str, ...], **kw: Any
 ) -> tuple[Any, Any]:
-    from synth.replay.run import build_context
+    from synth.replay.run import replay_context
     from synth.replay.trace import record_run
 
-    context = build_context(program, _spec_for_server(spec_body, kind, model_dirs))
+    context = replay_context(program, _spec_for_server(spec_body, kind, model_dirs))
     return context, record_run(context, program="program.al", **kw)
 
 

@@ -206,10 +206,10 @@ def replay_job(
     model_dirs: tuple[str, ...],
 ) -> dict[str, Any]:
     """Replay ``program`` against the task in ``spec_body``: the replay report as JSON."""
-    from synth.replay import replay
+    from synth.replay import replay_program
 
     spec = _spec_for_server(spec_body, kind, model_dirs)
-    return dict(replay(program, spec, trials=trials, seed=seed).to_json())
+    return dict(replay_program(program, spec, trials=trials, seed=seed).to_json())
 
 
 # -- orchestration (runs in the server) -------------------------------------------------------

@@ -13,7 +13,7 @@ The pipeline as a Python API (``docs/python-api.md``); each name is imported on 
 * :func:`believed_graph`, :func:`plan_task` (→ :class:`PlanResult`, its
   :class:`PinInHoleStrategy`), :func:`emit_program` — the stages one by one;
 * :func:`replay_program` (→ :class:`ReplayReport`) — run AL text on the task's simulated arm
-  (:func:`synth.replay.run.replay`; ``synth.replay`` itself is the replay's package);
+  (:func:`synth.replay.run.replay_program`; ``synth.replay`` itself is the replay's package);
 * :func:`export_trajectory` — the nominal run's joint trajectory (ROS YAML or CSV);
 * :class:`SynthError` — the base of every error a user can cause.
 """

@@ -172,10 +172,10 @@ def _write_montecarlo(args: argparse.Namespace, report: Any) -> None:
 
 
 def _write_trace(args: argparse.Namespace, text: str) -> None:
-    from synth.replay.run import build_context
+    from synth.replay.run import replay_context
     from synth.replay.trace import record_run
 
-    context = build_context(text, args.task, filename=args.program, distribution=args.distribution)
+    context = replay_context(text, args.task, filename=args.program, distribution=args.distribution)
     trace = record_run(context, trial=args.trial, seed=args.seed, program=args.program)
     write_output(args.trace, (json.dumps(trace.to_json()) + "\n").encode("utf-8"))
 
@@ -269,10 +269,10 @@ def _replay_with(
     client: Any,
 ) -> Any:
     """The replay of ``args`` (on ``client``'s Dask cluster when given); the bar closed."""
-    from synth.replay.run import replay
+    from synth.replay.run import replay_program
 
     try:
-        report = replay(
+        report = replay_program(
             text,
             args.task,
             trials=args.trials,
@@ -597,7 +597,7 @@ def _cmd_view(args: argparse.Namespace) -> int:
 
     from synth.models.loader import load_task
     from synth.pictures.view import view_html, view_scene
-    from synth.replay.run import build_context
+    from synth.replay.run import replay_context
     from synth.replay.trace import record_run
 
     if args.proof_trials < 0:
@@ -615,7 +615,7 @@ def _cmd_view(args: argparse.Namespace) -> int:
         )
         text = synthesize(spec, SynthesisOptions(proof=proof), base_dir=base_dir).program
         name = f"{spec.name}.al"
-    context = build_context(text, spec, filename=name, base_dir=base_dir)
+    context = replay_context(text, spec, filename=name, base_dir=base_dir)
     trace = record_run(context, program=name)
     write_output(args.output, view_html(view_scene(context, trace, text)).encode("utf-8"))
     report = trace.report

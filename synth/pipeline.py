@@ -44,8 +44,8 @@ from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
 from synth.models.spec import TaskSpec
 from synth.replay.proof import Proof, ProofOptions, prove
-from synth.replay.run import build_context as replay_context
 from synth.replay.run import machine_for, run_machine
+from synth.replay.run import replay_context as replay_context
 from synth.replay.trials import TrialPool
 from synth.replay.truth import HandErrors, nominal_world
 from synth.strategies.causes import root_cause

@@ -15,7 +15,7 @@ from synth.al.machine import IdealMachine
 from synth.al.parser import parse_program
 from synth.exceptions import ALRuntimeError, ALSyntaxError
 from synth.replay.machine import ReplayOptions
-from synth.replay.run import replay
+from synth.replay.run import replay_program
 
 ROOT = Path(__file__).resolve().parent.parent
 SEED = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
@@ -106,7 +106,9 @@ def test_wall_clock_budget_stops_a_loop_that_takes_no_simulated_time() -> None:
 
 
 def test_replay_of_a_move_loop_ends_at_the_simulated_budget_naming_the_line() -> None:
-    report = replay(MOVE_LOOP, SEED, options=ReplayOptions(max_time=20.0), filename="loop.al")
+    report = replay_program(
+        MOVE_LOOP, SEED, options=ReplayOptions(max_time=20.0), filename="loop.al"
+    )
     nominal = report.nominal
     assert nominal.outcome == "error" and nominal.line in (3, 4, 5)  # the loop body's lines
     assert "more than 20 s of simulated time" in nominal.message

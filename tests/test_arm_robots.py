@@ -40,8 +40,8 @@ from synth.models.graph import pose_to_se3
 from synth.models.loader import load_task
 from synth.models.park import nominal_environment, park_configuration
 from synth.models.spec import ArmSpec, HandSpec, ManipulatorSpec
-from synth.replay.run import build_context as replay_context
-from synth.strategies.context import build_context as plan_context
+from synth.replay.run import replay_context
+from synth.strategies.context import plan_context
 
 ROBOTS = example_robot_data_dir()
 TASKS = Path(__file__).resolve().parent.parent / "fixtures" / "tasks"

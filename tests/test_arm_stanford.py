@@ -234,7 +234,7 @@ def limit_margin(q: np.ndarray) -> float:
 def test_default_base_reaches_seed_workcell_with_hand_down():
     # The criteria fixtures/arms/stanford.yaml places the base by, measured at (20, 70) cm, 225°.
     arm = load_arm(ArmSpec(model="stanford"))
-    assert np.allclose(arm.transform_world_base.translation, [0.20, 0.70, 0.0])
+    assert np.allclose(arm.world_from_base.translation, [0.20, 0.70, 0.0])
     margins = []
     for target in seed_workcell_poses(180.0):
         solutions = arm.inverse(target)

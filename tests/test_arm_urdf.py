@@ -65,7 +65,7 @@ def planar(tmp_path: Path) -> Path:
 
 def test_planar_urdf_forward_kinematics_matches_closed_form(planar: Path):
     base = pin.SE3(pin.utils.rotate("z", 0.3), np.array([1.0, 2.0, 0.5]))
-    arm = load_urdf_arm(planar, "tip", HandSpec(), transform_world_base=base)
+    arm = load_urdf_arm(planar, "tip", HandSpec(), world_from_base=base)
     rng = np.random.default_rng(21)
     for _ in range(50):
         q = rng.uniform(arm.limits.lower, arm.limits.upper)

@@ -467,9 +467,9 @@ def test_golden_search_backs_out_of_a_point_where_nothing_is_felt() -> None:
 @pytest.mark.parametrize("task", TASKS)
 def test_golden_programs_replay_successfully_in_the_nominal_world(task: str) -> None:
     # Every emitted program parses and replays in the nominal world (the referee).
-    from synth.replay import replay
+    from synth.replay import replay_program
 
-    report = replay(
+    report = replay_program(
         (GOLDEN / f"{task}.al").read_text(encoding="utf-8"),
         ROOT / "fixtures" / "tasks" / f"{task}.yaml",
     )

@@ -20,7 +20,7 @@ from synth.models.jamming import clearance_ratio, fit_problem, wedging_tilt
 from synth.models.loader import load_task, parse_task
 from synth.models.workcell import NominalPoses, WorkcellModel
 from synth.replay.contact import first_contact
-from synth.replay.run import build_context, run_world
+from synth.replay.run import replay_context, run_world
 from synth.replay.truth import HandErrors, TrueWorld, nominal_world
 from synth.replay.wedging import two_point_depth, wedges, wedging_onset
 
@@ -154,7 +154,7 @@ def test_the_seed_program_wedges_in_a_box_tilted_past_the_onset(degrees, outcome
     # the held pin stays vertical, so its tilt at entry is the box's: 1.0° is below the replay's
     # onset 1.576°, 2.5° above it
     program = (SEED.parent.parent / "golden" / "seed_4_8.al").read_text(encoding="utf-8")
-    context = build_context(program, SEED)
+    context = replay_context(program, SEED)
     report = run_world(context, _box_tilted(context.graph, degrees), HandErrors.none())
     assert report.outcome == outcome
     if outcome == "violation":

@@ -21,7 +21,7 @@ from _tasks import synthesized
 from synth.models.arm import nearest_solution
 from synth.models.loader import load_task
 from synth.strategies.bow import BOW_FRACTION, axis_heights
-from synth.strategies.context import PlanContext, build_context
+from synth.strategies.context import PlanContext, plan_context
 from synth.strategies.planner import plan_task
 from synth.strategies.records import PinInHoleStrategy
 
@@ -33,26 +33,26 @@ DENSE = 2000
 
 def dense_bow(ctx: PlanContext, s: PinInHoleStrategy, *, vias: bool = True) -> float:
     """Largest distance [m] of the pin end from the axis, above the seat, on the program's path."""
-    transform_pin_hand = s.pickup.grasp.pin_from_hand()
+    pin_from_hand = s.pickup.grasp.pin_from_hand()
     world_hole = ctx.world_hole
     chain = [s.approach, *(s.approach_vias if vias else ()), s.target]
     q = np.array(s.pickup.joint_solution)  # the grasp; then the departure and approach
     configurations = []
     for d in (s.pickup.departure_point, *chain):
         base = ctx.world_pin if d.base == s.pin else world_hole  # departure: from the pin
-        target = base * d.xf * transform_pin_hand
+        target = base * d.xf * pin_from_hand
         q = nearest_solution(ctx.arm, ctx.arm.inverse(target, hint=q), q)
         assert q is not None
         configurations.append(q)
     configurations = configurations[1:]  # from the approach point on
     model, data = ctx.arm.model, ctx.arm.model.createData()
     hand_frame = ctx.arm.hand_frame
-    transform_hand_pin = transform_pin_hand.inverse()
+    hand_from_pin = pin_from_hand.inverse()
     worst = 0.0
     for q0, q1 in itertools.pairwise(configurations):
         for u in np.linspace(0.0, 1.0, DENSE):
             pin.framesForwardKinematics(model, data, q0 + u * (q1 - q0))
-            end = world_hole.actInv(data.oMf[hand_frame] * transform_hand_pin).translation
+            end = world_hole.actInv(data.oMf[hand_frame] * hand_from_pin).translation
             if end[2] >= -s.d_f:
                 worst = max(worst, math.hypot(end[0], end[1]))
     return worst
@@ -61,13 +61,13 @@ def dense_bow(ctx: PlanContext, s: PinInHoleStrategy, *, vias: bool = True) -> f
 @pytest.fixture(scope="module")
 def seed():
     spec = load_task(SEED)
-    return build_context(spec), plan_task(spec).strategy
+    return plan_context(spec), plan_task(spec).strategy
 
 
 @pytest.fixture(scope="module")
 def precision():
     spec = load_task(PRECISION)
-    return spec, build_context(spec), plan_task(spec).strategy
+    return spec, plan_context(spec), plan_task(spec).strategy
 
 
 def test_direct_approach_bows_millimetres_off_the_axis(seed) -> None:

@@ -21,7 +21,7 @@ from synth.models.loader import load_task
 from synth.pictures.montecarlo import draw_montecarlo, montecarlo_picture
 from synth.pictures.render import figure_bytes
 from synth.replay.report import ReplayReport
-from synth.replay.run import replay, replay_graph, world_errors
+from synth.replay.run import replay_graph, replay_program, world_errors
 
 TASK = FIXTURES / "seed_4_8.yaml"
 TRIALS = 24
@@ -35,7 +35,7 @@ def program() -> str:
 
 @pytest.fixture(scope="module")
 def run(program: str) -> tuple[ReplayReport, list[dict[str, dict[str, float]]], SvgFigure]:
-    report = replay(program, TASK, trials=TRIALS, seed=3, filename="tap.al")
+    report = replay_program(program, TASK, trials=TRIALS, seed=3, filename="tap.al")
     graph = replay_graph(load_task(TASK))
     errors = [world_errors(graph, 3, i) for i in range(TRIALS)]
     svg = SvgFigure(figure_bytes(draw_montecarlo(montecarlo_picture(report, errors, graph))))

@@ -25,14 +25,14 @@ from synth.codegen.emitter import emit_program
 from synth.models.believed import believed_graph
 from synth.models.loader import load_task
 from synth.models.spec import TaskSpec
-from synth.replay import replay
+from synth.replay import replay_program
 from synth.strategies import plan_task
-from synth.strategies.context import build_context
+from synth.strategies.context import plan_context
 from synth.strategies.grasp import (
     generate_pickups,
     hand_openings,
+    pin_from_approach,
     reached_grasp,
-    transform_pin_approach,
 )
 from synth.strategies.records import Grasp, Rejection
 from synth.units import DEG
@@ -47,7 +47,7 @@ def old_base() -> TaskSpec:
 
 
 def test_the_sweep_rejects_the_pickup_whose_move_from_park_hits_the_box(old_base) -> None:
-    ctx = build_context(old_base)
+    ctx = plan_context(old_base)
     pickups, rejected = generate_pickups(ctx)
     reasons = [r.reason for r in rejected if r.candidate == OBSTRUCTED]
     assert len(reasons) == 1 and "BPARK" in reasons[0]
@@ -80,11 +80,11 @@ def test_without_the_sweep_the_replay_catches_the_collision(old_base, monkeypatc
     checked = plan_task(old_base).strategy
     assert unchecked.name.startswith(OBSTRUCTED) and not checked.name.startswith(OBSTRUCTED)
     graph = believed_graph(old_base)
-    refused = replay(emit_program(unchecked, graph), old_base, base_dir=FIXTURES)
+    refused = replay_program(emit_program(unchecked, graph), old_base, base_dir=FIXTURES)
     assert refused.nominal.outcome == "violation"
     kinds = {(v.kind, v.line) for v in refused.nominal.violations}
     assert ("collision", 9) in kinds and "BOX" in refused.nominal.message  # the first MOVE
-    accepted = replay(emit_program(checked, graph), old_base, base_dir=FIXTURES)
+    accepted = replay_program(emit_program(checked, graph), old_base, base_dir=FIXTURES)
     assert accepted.nominal.outcome == "success", accepted.nominal.message
 
 
@@ -94,7 +94,7 @@ def test_every_planned_program_replays_in_the_nominal_world(path: Path) -> None:
     # the one proven (no candidate rejected by its nominal replay) and the replay agrees.
     synthesis = synthesized(path)
     assert [a.candidate for a in synthesis.attempts] == [synthesis.strategy.name]
-    report = replay(synthesis.program, path)
+    report = replay_program(synthesis.program, path)
     assert report.nominal.outcome == "success", (synthesis.strategy.name, report.nominal.message)
     assert report.nominal.violations == ()
 
@@ -104,7 +104,7 @@ def test_box_margin_bounds_every_sampled_displacement_of_its_corners() -> None:
     # of its bounding ball about its origin. Sampled: the corners' largest displacement over
     # 20 000 uniform errors (the extreme points of a box are its corners).
     spec = load_task(FIXTURES / "seed_4_8.yaml")
-    ctx = build_context(spec)
+    ctx = plan_context(spec)
     displacement = ctx.gross.empty.displacements["BOX"]
     margin = displacement.bound()
     t_max = math.hypot(0.3 * 0.0254, 0.2 * 0.0254)
@@ -138,7 +138,7 @@ def test_with_margins_no_sampled_world_hits_the_box_on_the_gross_motions(old_bas
     # collide anywhere; with p = 56/300, 0 of 60 would have chance
     # (1 − 0.187)^60 ≈ 4e-6.
     program = emit_program(plan_task(old_base).strategy, believed_graph(old_base))
-    report = replay(program, old_base, trials=60, seed=1, workers=2, base_dir=FIXTURES)
+    report = replay_program(program, old_base, trials=60, seed=1, workers=2, base_dir=FIXTURES)
     hits = [v for run in report.trials for v in run.violations if v.kind == "collision"]
     assert report.nominal.outcome == "success" and hits == []
 
@@ -152,14 +152,12 @@ def test_swept_configurations_are_the_ones_the_replay_moves_through(task: str) -
     from synth.strategies.approach import hand_at, hole_frame_offset, plan_approach
     from synth.strategies.records import Rejection
 
-    ctx = build_context(load_task(FIXTURES / f"{task}.yaml"))
+    ctx = plan_context(load_task(FIXTURES / f"{task}.yaml"))
     pickups, _ = generate_pickups(ctx, try_harder=True)
     assert pickups
     for p in pickups:
         grasp = p.strategy.grasp
-        approach = ctx.world_pin * transform_pin_approach(
-            grasp, ctx.options.grasp_approach_distance
-        )
+        approach = ctx.world_pin * pin_from_approach(grasp, ctx.options.grasp_approach_distance)
         q = solve_near(ctx.arm, approach, ctx.q_park)
         np.testing.assert_allclose(q, p.q_approach, atol=1e-9)
         q = solve_near(ctx.arm, ctx.world_pin * grasp.pin_from_hand(), q)

@@ -21,7 +21,7 @@ from _tasks import synthesized
 from synth.models.arm import CollisionScene, nearest_solution
 from synth.models.loader import load_task
 from synth.models.workcell import NominalPoses, WorkcellModel
-from synth.strategies.context import build_context
+from synth.strategies.context import plan_context
 from synth.strategies.planner import plan_task
 from synth.strategies.records import Grasp
 from synth.units import CM, DEG
@@ -43,13 +43,13 @@ def test_palm_is_inside_the_plate_at_a_gamma_100_seat() -> None:
     # d − d_f = 1.5 cm above the plate along a pin axis 10° from the hand's approach, and the
     # palm reaches below the plate's top. Distance on a scene of the arm and the plate alone.
     spec = load_task(DOWEL)
-    ctx = build_context(spec)
+    ctx = plan_context(spec)
     grasp = Grasp(180 * DEG, 100 * DEG, 3.00 * CM)
     seat = pin.SE3(pin.exp3(np.array([0.0, 0.0, 45 * DEG])), np.array([0.0, 0.0, -1.5 * CM]))
     hand = ctx.world_hole * seat * grasp.pin_from_hand()
     q = nearest_solution(ctx.arm, ctx.arm.inverse(hand, hint=ctx.q_park), ctx.q_park)
     assert q is not None
-    model = WorkcellModel(ctx.graph, [ctx.arm.transform_world_base.translation])
+    model = WorkcellModel(ctx.graph, [ctx.arm.world_from_base.translation])
     plate = [o for o in model.place(NominalPoses(ctx.graph)).obstacles if o.name == "PLATE"]
     scene = CollisionScene(ctx.arm, plate, opening=ctx.pin_shape.diameter)
     distances = dict(zip(scene.pairs, scene.distances(q), strict=True))
@@ -76,7 +76,7 @@ def test_dowel_program_succeeds_nominally_and_in_sampled_worlds(dowel) -> None:
 
 def test_sideways_error_has_no_vertical_margin_and_plans() -> None:
     spec = load_task(SIDEWAYS)
-    ctx = build_context(spec)
+    ctx = plan_context(spec)
     block = ctx.gross.carrying.displacements["BLOCK"]
     # Ball bound: |t| = √2·0.5 in plus 3° at the block's bounding radius (the 20 × 20 × 4.9 cm
     # box's ball about its origin at the bottom face: |AABB centre| + half-diagonal).
@@ -98,7 +98,7 @@ def test_sampled_displacements_stay_within_the_directional_support() -> None:
     # Exact nonlinear chain: points of the block moved by trans(t)∘rot_z(θ) (its error block),
     # projected on random directions, never exceed D(n), and come within 2 % of it.
     spec = load_task(SIDEWAYS)
-    ctx = build_context(spec)
+    ctx = plan_context(spec)
     block = ctx.gross.carrying.displacements["BLOCK"]
     rng = np.random.default_rng(0)
     corners = np.array(
@@ -119,7 +119,7 @@ def test_sampled_displacements_stay_within_the_directional_support() -> None:
 
 
 def test_the_arm_and_the_held_pin_keep_no_margin_against_each_other() -> None:
-    ctx = build_context(load_task(SIDEWAYS))
+    ctx = plan_context(load_task(SIDEWAYS))
     carrying = ctx.gross.carrying
     margins = carrying.pair_margins([("wrist_roll", "palm"), ("boom", "PIN1"), ("palm", "BLOCK")])
     assert margins[0] == 0.0 and margins[1] == 0.0
@@ -134,7 +134,7 @@ def test_approach_height_follows_the_certified_height_error() -> None:
     # Δz + the held pin's sweep margin + 1 mm, the target to d_f + Δz + 1 mm.
     path = TASKS / "height_error.yaml"
     spec = load_task(path)
-    ctx = build_context(spec)
+    ctx = plan_context(spec)
     proven = synthesized(path, trials=10)
     s = proven.strategy
     assert s.errors is not None and s.tap is not None and s.search is None

@@ -19,7 +19,7 @@ from synth.models.spec import HandSpec, PinShape
 from synth.report import al_trans
 from synth.strategies import PlanOptions
 from synth.strategies.approach import plan_approach
-from synth.strategies.context import build_context
+from synth.strategies.context import plan_context
 from synth.strategies.grasp import (
     finger_span,
     generate_pickups,
@@ -28,7 +28,7 @@ from synth.strategies.grasp import (
     grasp_distances,
     hand_openings,
     palm_clearance,
-    transform_pin_approach,
+    pin_from_approach,
 )
 from synth.strategies.hypotheses import Affixed, Holding
 from synth.strategies.records import Grasp
@@ -40,7 +40,7 @@ OPTS = PlanOptions()
 
 @pytest.fixture(scope="module")
 def ctx():
-    return build_context(load_task(SEED_TASK))
+    return plan_context(load_task(SEED_TASK))
 
 
 @pytest.fixture(scope="module")
@@ -93,16 +93,16 @@ def test_hand_openings_follow_l2139() -> None:
 
 def test_approach_points_match_the_phl_spec_printouts() -> None:
     # L2609: ω = 90°, γ = 135°: TRANS(ROTN(VECTOR(.679,.679,.281),149*DEG),VECTOR(-3.59,0,7.13)).
-    xf = transform_pin_approach(Grasp(90 * DEG, 135 * DEG, 3.54 * CM), 2 * INCH)
+    xf = pin_from_approach(Grasp(90 * DEG, 135 * DEG, 3.54 * CM), 2 * INCH)
     assert al_trans(xf) == "TRANS(ROTN(VECTOR(0.679,0.679,0.281),149*DEG),VECTOR(-3.59,0,7.13))"
     # L2661: ω = 90°, γ = 100°: ROTN(VECTOR(.608,.608,.510),126.*DEG), VECTOR(-5.,0,4.42).
-    xf = transform_pin_approach(Grasp(90 * DEG, 100 * DEG, 3.54 * CM), 2 * INCH)
+    xf = pin_from_approach(Grasp(90 * DEG, 100 * DEG, 3.54 * CM), 2 * INCH)
     assert al_trans(xf) == "TRANS(ROTN(VECTOR(0.608,0.608,0.51),126*DEG),VECTOR(-5,0,4.42))"
     # L2690: γ = 180°: VECTOR(0,0,8.62) = 3.54 + 5.08. The printout's axis (.924,.383,.001) is
     # rot(ẑ,45°)·rot(x̂,180°); the remark says ω = 315° (L2696, also L2244 and ROT(z,225°) =
     # ω − φ at L2248), whose axis is (.924,−.383,0): the printed rotation and the remark disagree
     # (a lost minus sign, repeated at L2692, L2723–2724?). We follow the remark.
-    xf = transform_pin_approach(Grasp(315 * DEG, 180 * DEG, 3.54 * CM), 2 * INCH)
+    xf = pin_from_approach(Grasp(315 * DEG, 180 * DEG, 3.54 * CM), 2 * INCH)
     np.testing.assert_allclose(xf.translation, [0, 0, 8.62 * CM], atol=0.005 * CM)
     axis = pin.log3(xf.rotation) / math.pi
     np.testing.assert_allclose(np.abs(axis), [0.924, 0.383, 0.0], atol=0.001)

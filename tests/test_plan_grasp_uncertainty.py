@@ -11,7 +11,7 @@ import pytest
 
 from synth.exceptions import NoStrategyError
 from synth.models.loader import load_task
-from synth.strategies.context import build_context
+from synth.strategies.context import plan_context
 from synth.strategies.grasp import centering_bounds
 from synth.strategies.planner import plan_task
 from synth.strategies.records import Grasp
@@ -27,7 +27,7 @@ def _error(x: float, y: float, rz: float) -> pin.SE3:
 def test_bound_covers_the_exact_chain_and_is_tight() -> None:
     """Closing offset of the pin at the grasp: certified bound vs the exact chain's corners."""
     spec = load_task(TASKS / "uncertain_rack.yaml")
-    ctx = build_context(spec, None, FIXTURES)
+    ctx = plan_context(spec, None, FIXTURES)
     grasp = Grasp(math.radians(90), math.pi, 0.035425)
     bounds = centering_bounds(ctx, grasp)
     world_rack = ctx.graph.world_from("rack")
@@ -82,11 +82,11 @@ def test_rail_rack_program_grasps_in_every_sampled_world() -> None:
     """The replay (the referee) never reports GRASP FAILED in 100 sampled rack poses."""
     from synth.codegen.emitter import emit_program
     from synth.models.believed import believed_graph
-    from synth.replay.run import replay
+    from synth.replay.run import replay_program
 
     spec = load_task(TASKS / "uncertain_rack_rail.yaml")
     result = plan_task(spec, base_dir=FIXTURES)
     program = emit_program(result.strategy, believed_graph(spec))
-    report = replay(program, spec, trials=100, seed=0)
+    report = replay_program(program, spec, trials=100, seed=0)
     assert report.nominal.outcome == "success"
     assert not [r for r in report.trials if r.message == "GRASP FAILED"]

@@ -16,7 +16,7 @@ from _paths import SEED_TAP_TASK, SEED_TASK
 from synth.errors.bounds import build_error_lp
 from synth.models.loader import load_task
 from synth.strategies import PlanOptions
-from synth.strategies.context import build_context
+from synth.strategies.context import plan_context
 from synth.strategies.footprint import estimate_footprint
 from synth.strategies.hypotheses import Affixed, GraspDetermination
 from synth.strategies.records import Grasp
@@ -48,12 +48,12 @@ def world_with(ctx, omega: float, gamma: float):
 
 @pytest.fixture(scope="module")
 def seed():
-    return build_context(load_task(SEED_TASK))
+    return plan_context(load_task(SEED_TASK))
 
 
 @pytest.fixture(scope="module")
 def tap():
-    return build_context(load_task(SEED_TAP_TASK))
+    return plan_context(load_task(SEED_TAP_TASK))
 
 
 def test_footprint_of_the_seeds_best_strategy(seed) -> None:

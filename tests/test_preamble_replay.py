@@ -19,7 +19,7 @@ from synth.al.parser import parse_program
 from synth.codegen.binding import bind_world, preamble
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
-from synth.replay import replay
+from synth.replay import replay_program
 
 ROOT = Path(__file__).resolve().parents[1]
 SEED = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
@@ -37,8 +37,8 @@ def test_preamble_before_a_program_replays_like_the_program() -> None:
     graph = AttributeGraph(load_task(SEED))
     bare = FIRST_CUT.read_text(encoding="utf-8")
     head = preamble(graph)
-    alone = replay(bare, SEED)
-    with_head = replay(head + "\n" + bare, SEED)
+    alone = replay_program(bare, SEED)
+    with_head = replay_program(head + "\n" + bare, SEED)
     assert alone.nominal.outcome == with_head.nominal.outcome == "success"
     assert with_head.nominal.time == pytest.approx(alone.nominal.time, abs=1e-9)
     # Each preamble statement runs once: the declarations, then one assignment or AFFIX a frame.
@@ -57,14 +57,14 @@ def test_preamble_before_a_program_replays_like_the_program() -> None:
     ],
 )
 def test_a_bound_frame_is_adopted_once_and_only_with_its_type(program: str, message: str) -> None:
-    report = replay(program, SEED)
+    report = replay_program(program, SEED)
     assert report.nominal.outcome == "error"
     assert message in report.nominal.message
 
 
 def test_a_program_may_still_declare_its_own_frames_twice_in_nested_blocks() -> None:
     # Shadowing in an inner block is a new variable, not the binding's frame.
-    report = replay("BEGIN FRAME BOX; BOX ← FRAME(NILROTN, VECTOR(0,0,1)*CM); END;", SEED)
+    report = replay_program("BEGIN FRAME BOX; BOX ← FRAME(NILROTN, VECTOR(0,0,1)*CM); END;", SEED)
     assert report.nominal.outcome != "error", report.nominal.message
 
 

@@ -33,7 +33,7 @@ from synth.replay.proof import (
     prove,
 )
 from synth.replay.report import wilson_interval
-from synth.replay.run import build_context, run_trial, trial_seed
+from synth.replay.run import replay_context, run_trial, trial_seed
 from synth.replay.trials import TrialPool
 from synth.replay.truth import sample_world
 from synth.strategies import PlanOptions, plan_task
@@ -138,7 +138,7 @@ def test_a_failing_program_is_rejected_early_with_the_replays_reason(first_cut_p
     reason = proof.reason()
     assert f"AL line {failure.line}" in reason and failure.outcome in reason
     # The errors reported are the trial's own draw: the same generator as run_trial's.
-    context = build_context(text, spec, base_dir=FIXTURES)
+    context = replay_context(text, spec, base_dir=FIXTURES)
     world_seed, _ = trial_seed(0, failure.index).spawn(2)
     world = sample_world(context.graph, np.random.default_rng(world_seed))
     assert failure.errors == world.parameters

@@ -27,10 +27,10 @@ from synth.models.graph import pose_to_se3
 from synth.models.loader import load_task
 from synth.replay import (
     HandErrors,
-    build_context,
     machine_for,
     nominal_world,
-    replay,
+    replay_context,
+    replay_program,
     run_machine,
 )
 from synth.replay.trace import Trace, record_run
@@ -64,7 +64,7 @@ OLD_BASE = (20.0, 80.0, 225.0)
 
 def test_search_listing_seats_the_pin_in_the_nominal_world() -> None:
     path = DATA / "seed_4_8_search.al"
-    context = build_context(path.read_text(encoding="utf-8"), SEED, filename=str(path))
+    context = replay_context(path.read_text(encoding="utf-8"), SEED, filename=str(path))
     machine = machine_for(context, nominal_world(context.graph), HandErrors.none())
     report, interpreter = run_machine(context, machine)
     assert report.outcome == "success", report.message
@@ -106,7 +106,7 @@ def test_no_joint_moves_faster_than_its_velocity_limit() -> None:
     # Sampled every 20 ms along the replay's own timeline: the limits alone, not the timing rule
     # that produced the motions, bound each joint's displacement between two samples.
     path = DATA / "seed_4_8_search.al"
-    context = build_context(path.read_text(encoding="utf-8"), SEED, filename=str(path))
+    context = replay_context(path.read_text(encoding="utf-8"), SEED, filename=str(path))
     trace = record_run(context, program=path.name)
     q = np.array([sample.q for sample in trace.samples])
     t = np.array([sample.t for sample in trace.samples])
@@ -116,7 +116,7 @@ def test_no_joint_moves_faster_than_its_velocity_limit() -> None:
 
 def test_tap_listing_seats_the_pin_in_the_nominal_world() -> None:
     path = DATA / "seed_4_8_tap.al"
-    context = build_context(path.read_text(encoding="utf-8"), TAP, filename=str(path))
+    context = replay_context(path.read_text(encoding="utf-8"), TAP, filename=str(path))
     machine = machine_for(context, nominal_world(context.graph), HandErrors.none())
     report, interpreter = run_machine(context, machine)
     assert report.outcome == "success", report.message
@@ -159,7 +159,7 @@ def test_tap_listing_via_point_is_within_the_boom_travel_at_the_fixture_base() -
     s3 = tap_via_point_boom_extension(*FIXTURE_BASE)
     assert 6 * INCH + 9 * CM < s3 < 35 * INCH
     text = (DATA / "seed_4_8_tap.al").read_text(encoding="utf-8")
-    report = replay(text, TAP)
+    report = replay_program(text, TAP)
     assert report.nominal.outcome == "success", report.nominal.message
 
 
@@ -169,7 +169,7 @@ def test_tap_listing_at_the_old_base_reaches_past_the_boom_stop() -> None:
     s3 = tap_via_point_boom_extension(*OLD_BASE)
     assert math.isclose(s3, 14.94 * CM, abs_tol=0.005 * CM) and s3 < 6 * INCH
     text = (DATA / "seed_4_8_tap.al").read_text(encoding="utf-8")
-    report = replay(text, with_base(load_task(TAP), *OLD_BASE))
+    report = replay_program(text, with_base(load_task(TAP), *OLD_BASE))
     assert report.nominal.outcome == "violation"
     (violation,) = report.nominal.violations
     line = line_of(text, "MOVE BMANIP TO PIN1*TRANS(ROTN(VECTOR(.679,.679,.281),149*DEG)")
@@ -179,7 +179,7 @@ def test_tap_listing_at_the_old_base_reaches_past_the_boom_stop() -> None:
 
 def test_first_cut_program_seats_the_pin_in_the_nominal_world() -> None:
     text = (DATA / "seed_4_8_first_cut.al").read_text(encoding="utf-8")
-    report = replay(text, SEED)
+    report = replay_program(text, SEED)
     assert report.nominal.outcome == "success", report.nominal.message
 
 
@@ -195,7 +195,7 @@ def test_a_target_out_of_the_workspace_is_unreachable_at_its_line() -> None:
     # 3 m above the park frame: farther from the shoulder than the boom (35 in) and the wrist
     # (S6 = 26.3 cm) reach together
     text = "OPEN BHAND TO 2*CM;\n{ reach up }\nMOVE BMANIP TO BPARK + VECTOR(0,0,300)*CM;\n"
-    report = replay(text, SEED)
+    report = replay_program(text, SEED)
     assert report.nominal.outcome == "violation" and not report.ok
     (violation,) = report.nominal.violations
     assert violation.kind == "unreachable" and violation.line == 3
@@ -206,7 +206,7 @@ def test_a_hand_turned_back_at_the_arm_needs_theta5_beyond_its_limit() -> None:
     # At BPARK with the approach vector pointing up: the boom is about level there, so the
     # hand's z makes more than 110° with it (θ5 ∈ [−110°, 110°], seed L963)
     text = "MOVE BMANIP TO BPARK*TRANS(ROT(YHAT,180*DEG),NILVECT);\n"
-    report = replay(text, SEED)
+    report = replay_program(text, SEED)
     (violation,) = report.nominal.violations
     assert violation.kind == "joint_limit" and violation.line == 1
     assert "theta5" in violation.detail
@@ -216,7 +216,7 @@ def test_a_motion_into_the_table_is_a_collision_at_its_line() -> None:
     # BPARK is 10.7 cm above the table, hand pointing down; 12 cm lower puts the fingertips
     # (one pad radius, 0.635 cm, past the hand origin) below the table top
     text = "OPEN BHAND TO 2*CM;\nMOVE BMANIP TO BPARK - VECTOR(0,0,12)*CM;\nOPEN BHAND TO 1*CM;\n"
-    report = replay(text, SEED)
+    report = replay_program(text, SEED)
     (violation,) = report.nominal.violations
     assert violation.kind == "collision" and violation.line == 2
     assert "table" in violation.detail and "finger" in violation.detail
@@ -231,7 +231,7 @@ def test_a_guarded_motion_onto_the_table_stops_without_violation() -> None:
         "  ON FORCE(ZHAT) > 8*OZ DO STOP;\n"
         "Z = ZHAT . DISPL(BMANIP);\n"
     )
-    context = build_context(text, SEED)
+    context = replay_context(text, SEED)
     machine = machine_for(context, nominal_world(context.graph), HandErrors.none())
     report, interpreter = run_machine(context, machine)
     # no violation (the task's pin stays in its rack, so the goal is not met)…
@@ -243,14 +243,14 @@ def test_a_guarded_motion_onto_the_table_stops_without_violation() -> None:
 
 
 def test_unknown_frame_is_an_error_with_its_line() -> None:
-    report = replay("OPEN BHAND TO 2*CM;\nMOVE BMANIP TO NOSUCH;\n", SEED)
+    report = replay_program("OPEN BHAND TO 2*CM;\nMOVE BMANIP TO NOSUCH;\n", SEED)
     assert report.nominal.outcome == "error"
     assert report.nominal.line == 2 and "NOSUCH" in report.nominal.message
 
 
 def test_syntax_error_names_its_line() -> None:
     with pytest.raises(ALSyntaxError) as caught:
-        replay("OPEN BHAND TO 2*CM;\nMOVE BMANIP TO BPARK VIA;\n", SEED)
+        replay_program("OPEN BHAND TO 2*CM;\nMOVE BMANIP TO BPARK VIA;\n", SEED)
     assert caught.value.line == 2
 
 
@@ -260,7 +260,7 @@ def test_syntax_error_names_its_line() -> None:
 
 def test_report_json_has_the_issue_shape() -> None:
     text = (DATA / "seed_4_8_search.al").read_text(encoding="utf-8")
-    document = replay(text, SEED, trials=3, seed=5).to_json()
+    document = replay_program(text, SEED, trials=3, seed=5).to_json()
     assert set(document) == {"ok", "nominal", "monte_carlo"}
     assert set(document["nominal"]) == {
         "outcome",

@@ -18,7 +18,7 @@ import pinocchio as pin
 import pytest
 
 from synth.models.arm import SweepOptions
-from synth.replay import build_context, machine_for
+from synth.replay import machine_for, replay_context
 from synth.replay.advance import PairMotion, fast_sweep
 from synth.replay.bounds import ArmChain, PinExtent, PinFlight, safe_step
 from synth.replay.contact import GJK_MARGIN, _Pin, _Target, pin_points
@@ -32,7 +32,7 @@ GOLDEN = ROOT / "fixtures" / "golden" / "seed_4_8.al"
 
 @pytest.fixture(scope="module")
 def cell():  # type: ignore[no-untyped-def]
-    context = build_context(GOLDEN.read_text(encoding="utf-8"), SEED_TASK)
+    context = replay_context(GOLDEN.read_text(encoding="utf-8"), SEED_TASK)
     machine = machine_for(context, nominal_world(context.graph), HandErrors.none())
     return context, machine
 

@@ -16,7 +16,7 @@ import distributed
 import pytest
 
 from synth.cli import main
-from synth.replay import replay
+from synth.replay import replay_program
 
 ROOT = Path(__file__).parent.parent
 SEED_TASK = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
@@ -36,8 +36,8 @@ def client() -> Iterator[Any]:
 def test_a_cluster_gives_the_local_report(client: Any) -> None:
     text = SEARCH.read_text(encoding="utf-8")
     # 20 trials of seed 0 include trial 18, the listing's abort beside the box
-    on_cluster = replay(text, SEED_TASK, trials=20, seed=0, client=client)
-    local = replay(text, SEED_TASK, trials=20, seed=0, workers=1)
+    on_cluster = replay_program(text, SEED_TASK, trials=20, seed=0, client=client)
+    local = replay_program(text, SEED_TASK, trials=20, seed=0, workers=1)
     assert on_cluster.trials == local.trials
     assert on_cluster.monte_carlo == local.monte_carlo
     assert dict(local.monte_carlo.outcomes) == {"success": 19, "abort": 1}

@@ -42,7 +42,7 @@ from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
 from synth.models.spec import Uncertainty
 from synth.replay.located import ContactPlacement, located_objects
-from synth.replay.run import build_context, replay, replay_graph, run_world, trial_seed
+from synth.replay.run import replay_context, replay_graph, replay_program, run_world, trial_seed
 from synth.replay.truth import HandErrors, error_parameters, sample_world
 from synth.strategies.planner import plan_task
 
@@ -237,12 +237,12 @@ def test_a_wrong_locate_result_fails_the_replay(
     spec = load_task(SEED_FIXTURE)
     program = emit_program(plan_task(spec).strategy, believed_graph(spec))
     trials = 40
-    report = replay(program, spec, trials=trials, seed=0)
+    report = replay_program(program, spec, trials=trials, seed=0)
     assert report.nominal.success  # the program does what its (wrong) beliefs say
     failing = trials - report.monte_carlo.outcomes.get("success", 0)
     assert failing >= at_least_failing
     # the referee as it was drew the truth around the belief: it passed them all
-    context = build_context(program, spec)
+    context = replay_context(program, spec)
     around_belief = AttributeGraph(context.graph.spec.model_copy(update={"contacts": ()}))
     manipulator = spec.manipulator
     assert manipulator is not None

@@ -47,9 +47,9 @@ from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
 from synth.replay import (
     HandErrors,
-    build_context,
     machine_for,
-    replay,
+    replay_context,
+    replay_program,
     run_machine,
     run_trial,
     sample_world,
@@ -85,7 +85,7 @@ def abort_line(text: str) -> int:
 
 def check_search_failures(text: str, report_trials: list, seed: int) -> None:  # type: ignore[type-arg]
     """Every failed trial aborted because the pin passed beside the box (hand geometry)."""
-    context = build_context(text, SEED)
+    context = replay_context(text, SEED)
     first_attempt = abort_line(text) - 19  # the first attempt's own ON ARRIVAL, L2736
     for index, run in enumerate(report_trials):
         if run.outcome == "success":
@@ -110,7 +110,7 @@ def check_search_failures(text: str, report_trials: list, seed: int) -> None:  #
 
 @pytest.mark.slow
 def test_search_listing_monte_carlo_300(search_text: str) -> None:
-    report = replay(search_text, SEED, trials=300, seed=0, workers=2)
+    report = replay_program(search_text, SEED, trials=300, seed=0, workers=2)
     mc = report.monte_carlo
     assert report.ok and mc.trials == 300
     assert mc.successes >= 279, mc.outcomes
@@ -122,7 +122,7 @@ def test_search_listing_monte_carlo_300(search_text: str) -> None:
     assert mc.time_mean == pytest.approx(times.mean())
     assert mc.time_p95 == pytest.approx(np.percentile(times, 95))
     # trials do not depend on the worker count: a few re-run in this process
-    context = build_context(search_text, SEED)
+    context = replay_context(search_text, SEED)
     for index in (0, 7, 123):
         again = run_trial(context, 0, index)
         assert again == report.trials[index]
@@ -130,7 +130,7 @@ def test_search_listing_monte_carlo_300(search_text: str) -> None:
 
 @pytest.mark.slow
 def test_search_listing_monte_carlo_2000(search_text: str) -> None:
-    report = replay(search_text, SEED, trials=2000, seed=0, workers=WORKERS)
+    report = replay_program(search_text, SEED, trials=2000, seed=0, workers=WORKERS)
     mc = report.monte_carlo
     # measured 1948/2000 (module docstring)
     assert mc.successes >= 1880, mc.outcomes
@@ -145,7 +145,9 @@ def test_search_listing_monte_carlo_2000_normal(search_text: str) -> None:
     # 2000/2000 (seed 0; 1999/2000 with the arm at (20, 80) cm): the beside-the-box aborts
     # need a box error near its bound, which a 3σ tolerance makes rare.
     # Binomial: for a true rate of 0.995, P(K < 1980) = 2e-4.
-    report = replay(search_text, SEED, trials=2000, seed=0, workers=WORKERS, distribution="normal")
+    report = replay_program(
+        search_text, SEED, trials=2000, seed=0, workers=WORKERS, distribution="normal"
+    )
     mc = report.monte_carlo
     assert report.ok and mc.trials == 2000
     assert mc.successes >= 1980, mc.outcomes
@@ -184,7 +186,7 @@ def test_synths_search_program_does_not_give_up_beside_the_box() -> None:
     # ≥ 397 of 400 (scipy.stats.binom): a program as good as the listing (0.974) passes with
     # P = 0.007, one at 0.998 fails with P = 0.009.
     text = (ROOT / "fixtures" / "golden" / "seed_4_8.al").read_text(encoding="utf-8")
-    report = replay(text, SEED, trials=400, seed=0, workers=2)
+    report = replay_program(text, SEED, trials=400, seed=0, workers=2)
     mc = report.monte_carlo
     assert report.ok and mc.successes >= 397, mc.outcomes
 
@@ -205,7 +207,7 @@ def first_cut_model(samples: int = 200_000) -> float:
 
 def test_first_cut_program_fails_in_a_measurable_fraction() -> None:
     text = (DATA / "seed_4_8_first_cut.al").read_text(encoding="utf-8")
-    report = replay(text, SEED, trials=120, seed=0, workers=2)
+    report = replay_program(text, SEED, trials=120, seed=0, workers=2)
     mc = report.monte_carlo
     assert report.ok  # the believed world is fine
     failures = mc.trials - mc.successes

@@ -54,7 +54,7 @@ import numpy as np
 import pytest
 
 from synth.cli import _TrialOutput, main
-from synth.replay import ReplayOptions, build_context, machine_for, replay, run_trial
+from synth.replay import ReplayOptions, machine_for, replay_context, replay_program, run_trial
 from synth.replay.report import RunReport
 from synth.replay.run import TrialRecord, trial_errors
 from synth.replay.truth import HandErrors, nominal_world
@@ -84,7 +84,7 @@ RECORDED = {
     ids=["search-0", "golden-0", "search-1", "golden-1"],
 )
 def test_outcome_counts_are_the_recorded_ones(program: Path, seed: int) -> None:
-    report = replay(
+    report = replay_program(
         program.read_text(encoding="utf-8"), SEED_TASK, trials=200, seed=seed, workers=2
     )
     assert dict(report.monte_carlo.outcomes) == RECORDED[(program, seed)]
@@ -95,8 +95,8 @@ def test_outcome_counts_are_the_recorded_ones(program: Path, seed: int) -> None:
 )
 def test_fast_path_runs_are_the_reference_runs(program: Path, indices: tuple[int, ...]) -> None:
     text = program.read_text(encoding="utf-8")
-    fast = build_context(text, SEED_TASK)
-    reference = build_context(text, SEED_TASK, options=ReplayOptions(reference=True))
+    fast = replay_context(text, SEED_TASK)
+    reference = replay_context(text, SEED_TASK, options=ReplayOptions(reference=True))
     for index in indices:
         a, b = run_trial(fast, 0, index), run_trial(reference, 0, index)
         assert (a.outcome, a.line, a.message, a.statements) == (
@@ -112,7 +112,7 @@ def test_fast_path_runs_are_the_reference_runs(program: Path, indices: tuple[int
 
 @pytest.fixture(scope="module")
 def scene():  # type: ignore[no-untyped-def]
-    context = build_context(GOLDEN.read_text(encoding="utf-8"), SEED_TASK)
+    context = replay_context(GOLDEN.read_text(encoding="utf-8"), SEED_TASK)
     machine = machine_for(context, nominal_world(context.graph), HandErrors.none())
     return machine.scene()
 
@@ -183,7 +183,7 @@ def test_json_streams_one_record_per_trial(capsys: pytest.CaptureFixture[str]) -
     assert code == 0
     document = json.loads(out)
     assert list(document) == ["trials", "ok", "nominal", "monte_carlo"]
-    context = build_context(SEARCH.read_text(encoding="utf-8"), SEED_TASK)
+    context = replay_context(SEARCH.read_text(encoding="utf-8"), SEED_TASK)
     assert [r["index"] for r in document["trials"]] == [0, 1, 2, 3]
     for record in document["trials"]:
         run = run_trial(context, 0, record["index"])
@@ -204,7 +204,7 @@ def test_failures_and_min_success(capsys: pytest.CaptureFixture[str]) -> None:
     assert "outcomes: success 29, abort 1" in out
     assert "first 1 failing trial(s):" in out
     assert "trial 18: abort at line 60: EXPECTED A FORCE HERE" in out
-    errors = trial_errors(build_context(SEARCH.read_text(encoding="utf-8"), SEED_TASK), 0, 18)
+    errors = trial_errors(replay_context(SEARCH.read_text(encoding="utf-8"), SEED_TASK), 0, 18)
     box = errors["box"]
     assert f"box: x {100 * box['x']:+.4f} cm, y {100 * box['y']:+.4f} cm" in out
     assert f"rz {math.degrees(box['rz']):+.4f}°" in out
@@ -218,7 +218,7 @@ def test_one_trial_alone_is_the_trial_of_the_full_run(capsys: pytest.CaptureFixt
     )
     assert code == 1  # an abort
     record = json.loads(out)
-    context = build_context(SEARCH.read_text(encoding="utf-8"), SEED_TASK)
+    context = replay_context(SEARCH.read_text(encoding="utf-8"), SEED_TASK)
     run = run_trial(context, 0, 18)
     assert record["index"] == 18 and record["seed"] == 0
     assert (record["outcome"], record["line"], record["time"]) == (run.outcome, run.line, run.time)

@@ -24,7 +24,7 @@ from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task, parse_task
 from synth.pipeline import SequenceSynthesis, SynthesisOptions, _step_check, synthesize
 from synth.replay.proof import ProofOptions
-from synth.replay.run import build_context, machine_for, run_machine
+from synth.replay.run import machine_for, replay_context, run_machine
 from synth.replay.truth import HandErrors, sample_world
 from synth.strategies.sequence import plan_sequence
 
@@ -134,7 +134,7 @@ def test_seat_rows_hold_for_every_sampled_truth_and_reading():
 def test_the_program_corrects_the_box_in_the_true_world():
     spec = load_task(TWO)
     program = (GOLDEN / "seed_box_two_pins.al").read_text(encoding="utf-8")
-    context = build_context(program, TWO)
+    context = replay_context(program, TWO)
     manipulator = spec.manipulator
     assert manipulator is not None
     graph = AttributeGraph(spec)

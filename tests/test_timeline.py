@@ -30,7 +30,7 @@ from synth.al.interpreter import Interpreter
 from synth.al.machine import DurationConstraint, IdealMachine, MachineCommand
 from synth.al.parser import parse_program
 from synth.al.timeline import segment_times
-from synth.replay import build_context, machine_for
+from synth.replay import machine_for, replay_context
 from synth.replay.truth import HandErrors, nominal_world
 
 ROOT = Path(__file__).parent.parent
@@ -47,7 +47,7 @@ def run_ideal(text: str, machine: IdealMachine) -> Interpreter:
 
 def run_replay(text: str) -> tuple[Interpreter, float]:
     """Run ``text`` on the replay's machine in the seed task's nominal world: (it, hand_time)."""
-    context = build_context(GOLDEN.read_text(encoding="utf-8"), SEED_TASK)
+    context = replay_context(GOLDEN.read_text(encoding="utf-8"), SEED_TASK)
     machine = machine_for(context, nominal_world(context.graph), HandErrors.none())
     interpreter = context.binding.interpreter(machine)
     interpreter.run(parse_program(text, filename="t.al"))

@@ -17,7 +17,7 @@ import yaml
 
 from synth.cli import main
 from synth.replay.machine import ReplayMachine
-from synth.replay.run import build_context, run_machine
+from synth.replay.run import replay_context, run_machine
 from synth.replay.truth import HandErrors, nominal_world
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -37,7 +37,7 @@ class Observer(ReplayMachine):
 
 @pytest.fixture(scope="module")
 def observed() -> list[tuple[float, np.ndarray, int]]:
-    context = build_context(PROGRAM.read_text(encoding="utf-8"), TASK)
+    context = replay_context(PROGRAM.read_text(encoding="utf-8"), TASK)
     world = nominal_world(context.graph)
     workcell = context.workcell.place(world)
     pins = {f: world.pose(f) for f in workcell.pins}

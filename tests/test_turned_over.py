@@ -19,7 +19,7 @@ from synth.exceptions import SpecError
 from synth.models.graph import AttributeGraph
 from synth.models.insertion import derive
 from synth.models.loader import load_task
-from synth.strategies.context import build_context
+from synth.strategies.context import plan_context
 
 TASK = Path(__file__).resolve().parent / "data" / "tasks" / "turned_over.yaml"
 
@@ -62,7 +62,7 @@ def test_a_force_guard_direction_is_fixed_when_its_motion_starts() -> None:
 
 def test_the_planner_refuses_a_turned_over_pin_naming_the_direction() -> None:
     with pytest.raises(SpecError) as info:
-        build_context(load_task(TASK))
+        plan_context(load_task(TASK))
     assert info.value.path == "insertion.direction"
     assert "turned-over pin cannot be planned" in info.value.detail
     assert "PIN1 would enter BH1 head first" in info.value.detail

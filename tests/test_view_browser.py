@@ -23,7 +23,7 @@ from PIL import Image
 
 from synth.cli import main
 from synth.pictures.view import CANVAS, Camera, project, view_html, view_scene
-from synth.replay.run import build_context
+from synth.replay.run import replay_context
 from synth.replay.trace import Trace, record_run
 
 TASK = FIXTURES / "seed_4_8.yaml"
@@ -59,7 +59,7 @@ def chromium() -> str:
 @pytest.fixture(scope="module")
 def page(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict, Trace]:
     program = synthesized(TASK).program
-    context = build_context(program, TASK)
+    context = replay_context(program, TASK)
     trace = record_run(context, program="seed.al")
     scene = view_scene(context, trace, program)
     path = tmp_path_factory.mktemp("view") / "view.html"

@@ -133,11 +133,11 @@ def test_worlds_agree_with_a_dictionary_model(ops: list) -> None:
 
 def test_the_planners_root_world_states_the_task() -> None:
     from synth.models.loader import load_task
-    from synth.strategies.context import build_context
+    from synth.strategies.context import plan_context
     from synth.strategies.hypotheses import At as PinAt
     from synth.strategies.hypotheses import Holding, InHole
 
-    ctx = build_context(load_task(SEED))
+    ctx = plan_context(load_task(SEED))
     world = ctx.base_world
     # The task starts with the pin in its start hole (the rack, at depth d_i) and the hand empty.
     assert world.get(Holding, ctx.hand_al).what == "nothing"

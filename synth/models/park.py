@@ -36,7 +36,7 @@ FIELD = "manipulator.park"
 
 def nominal_environment(graph: AttributeGraph, arm: Arm) -> list[Obstacle]:
     """The believed workcell's solids and standing pins (the planner's and the start's world)."""
-    model = WorkcellModel(graph, [arm.transform_world_base.translation])
+    model = WorkcellModel(graph, [arm.world_from_base.translation])
     workcell = model.place(NominalPoses(graph))
     pins = [model.pin_obstacle(frame, graph.world_from(frame)) for frame in model.pins]
     return [*workcell.obstacles, *pins]

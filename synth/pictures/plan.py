@@ -108,7 +108,7 @@ def _heights(strategy: PinInHoleStrategy, graph: AttributeGraph) -> tuple[Height
     at_approach = pin.SE3(
         pin.exp3(np.array([0.0, 0.0, strategy.phi])), np.array([0.0, 0.0, strategy.standoff])
     )
-    transform_pin_end = strategy.approach.xf.inverse() * at_approach
+    pin_from_end = strategy.approach.xf.inverse() * at_approach
     heights = [
         Height("surface", "surface", 0.0),
         Height("approach", "approach point (standoff)", strategy.standoff),
@@ -116,10 +116,10 @@ def _heights(strategy: PinInHoleStrategy, graph: AttributeGraph) -> tuple[Height
         Height("dtry", "guarded-move target (dtry)", -strategy.dtry),
     ]
     for k, via in enumerate(strategy.approach_vias, start=1):
-        z = float((via.xf * transform_pin_end).translation[2])
+        z = float((via.xf * pin_from_end).translation[2])
         heights.append(Height(f"via-{k}", f"approach via {k}", z))
     if strategy.tap is not None:
-        z = float((strategy.tap.via.xf * transform_pin_end).translation[2])
+        z = float((strategy.tap.via.xf * pin_from_end).translation[2])
         heights.append(Height("tap-via", "tap start", z))
     return tuple(heights)
 

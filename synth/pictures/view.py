@@ -220,7 +220,7 @@ def view_scene(context: ReplayContext, trace: Trace, program_text: str) -> dict[
         solid["pose"], solid["poses"] = None, _b64(poses)
         bodies.append(solid)
     hands = np.array([s.hand.translation for s in trace.samples])
-    base = context.arm.transform_world_base.translation
+    base = context.arm.world_from_base.translation
     camera = _camera(np.vstack([*static_points, hands]), base)
     width, height = CANVAS
     return {

@@ -25,9 +25,8 @@ from synth.replay.report import (
 )
 from synth.replay.run import (
     ReplayContext,
-    build_context,
     machine_for,
-    replay,
+    replay_context,
     replay_program,
     run_machine,
     run_nominal,
@@ -53,10 +52,9 @@ __all__ = [
     "Violation",
     "ViolationKind",
     "ViolationStop",
-    "build_context",
     "machine_for",
     "nominal_world",
-    "replay",
+    "replay_context",
     "replay_program",
     "run_machine",
     "run_nominal",

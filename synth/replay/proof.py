@@ -39,7 +39,7 @@ from typing import Any, Literal
 from synth.models.spec import Distribution, TaskSpec
 from synth.replay.machine import ReplayOptions
 from synth.replay.report import MonteCarloReport, RunReport, wilson_interval
-from synth.replay.run import build_context, run_nominal, summarise, trial_errors
+from synth.replay.run import replay_context, run_nominal, summarise, trial_errors
 from synth.replay.tally import TrialTally
 from synth.replay.trials import TrialPool, iter_trials, job_for
 
@@ -311,7 +311,7 @@ def prove(
     each trial. Raises ALSyntaxError or SpecError for a program or task the replay cannot use.
     """
     opts = options or ProofOptions()
-    context = build_context(
+    context = replay_context(
         program_text,
         task,
         base_dir=base_dir,

@@ -60,7 +60,7 @@ def _problem(arm: Arm, pose: pin.SE3) -> ReachProblem:
     inverse = arm.closed_form
     if not isinstance(inverse, StanfordInverse):
         return ReachProblem("unreachable", f"no arm solution reaches the hand pose {where}")
-    t = inverse.transform_world_base.inverse() * pose * inverse.tool_offset.inverse()
+    t = inverse.world_from_base.inverse() * pose * inverse.tool_offset.inverse()
     candidates = stanford_inverse_all(inverse.params, t.rotation, t.translation)
     limits = arm.limits
     prismatic = [i for i, kind in enumerate(limits.kinds) if kind == "prismatic"]

@@ -61,9 +61,8 @@ __all__ = [
     "ReplayContext",
     "TrialRecord",
     "TrialSink",
-    "build_context",
     "machine_for",
-    "replay",
+    "replay_context",
     "replay_graph",
     "replay_one",
     "replay_program",
@@ -105,7 +104,7 @@ class ReplayContext:
     """Collision scenes shared by this context's runs (moved to each trial's poses)."""
 
 
-def build_context(
+def replay_context(
     program_text: str,
     task: TaskSpec | str | Path,
     *,
@@ -142,7 +141,7 @@ def build_context(
         graph=graph,
         binding=bind_world(graph),
         arm=arm,
-        workcell=WorkcellModel(graph, [arm.transform_world_base.translation]),
+        workcell=WorkcellModel(graph, [arm.world_from_base.translation]),
         park=park,
         q_park=q_park,
         options=options or ReplayOptions(),
@@ -339,7 +338,7 @@ def replay_one(
     if index < 0:
         raise ValueError(f"the trial index must be ≥ 0, got {index}")
     # build_context resolves a task file's URDF paths against its directory itself
-    context = build_context(
+    context = replay_context(
         program_text,
         task,
         filename=filename,
@@ -350,7 +349,7 @@ def replay_one(
     return trial_record(context, seed, index, run_trial(context, seed, index))
 
 
-def replay(
+def replay_program(
     program_text: str,
     task: TaskSpec | str | Path,
     *,
@@ -386,7 +385,7 @@ def replay(
         raise ValueError(f"trials must be ≥ 0, got {trials}")
     if isinstance(task, str | Path) and base_dir is None:
         base_dir = Path(task).resolve().parent
-    context = build_context(
+    context = replay_context(
         program_text,
         task,
         filename=filename,
@@ -428,5 +427,4 @@ def replay(
     )
 
 
-replay_program = replay
 """The entry point the HTTP service looks up (``server/service.py``)."""

@@ -38,7 +38,7 @@ from synth.exceptions import SynthError
 from synth.replay.machine import ReplayMachine
 from synth.replay.motion import Motion
 from synth.replay.report import RunReport
-from synth.replay.run import ReplayContext, build_context, run_machine
+from synth.replay.run import ReplayContext, replay_context, run_machine
 from synth.replay.truth import HandErrors, nominal_world
 
 __all__ = [
@@ -187,7 +187,7 @@ def export_trajectory(
     """
     if isinstance(task, str | Path) and base_dir is None:
         base_dir = Path(task).resolve().parent
-    context = build_context(program_text, task, filename=filename, base_dir=base_dir)
+    context = replay_context(program_text, task, filename=filename, base_dir=base_dir)
     trajectory = record_nominal(context, dt=dt)
     if trajectory.report.outcome != "success":
         r = trajectory.report

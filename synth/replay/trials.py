@@ -91,13 +91,13 @@ _CONTEXTS: OrderedDict[str, ReplayContext] = OrderedDict()
 
 
 def _context(job: TrialJob) -> ReplayContext:
-    from synth.replay.run import build_context
+    from synth.replay.run import replay_context
 
     key = job.key
     if key in _CONTEXTS:
         _CONTEXTS.move_to_end(key)
         return _CONTEXTS[key]
-    context = build_context(
+    context = replay_context(
         job.program_text,
         job.spec,
         filename=job.filename,

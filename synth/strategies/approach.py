@@ -38,7 +38,7 @@ import pinocchio as pin
 from synth.errors.estimate import RelationModel
 from synth.models.world import World
 from synth.strategies.bow import BOW_FRACTION, AxisPath, plan_axis_path
-from synth.strategies.context import Configuration, PlanContext, hand_at, transform_end_hand
+from synth.strategies.context import Configuration, PlanContext, end_from_hand, hand_at
 from synth.strategies.grasp import Pickup
 from synth.strategies.hypotheses import ApproachPhi, ApproachStandoff
 from synth.strategies.records import Destination, PinInHoleStrategy, Rejection
@@ -48,11 +48,11 @@ __all__ = [
     "APPROACH_CLEARANCE",
     "Candidate",
     "approach_heights",
+    "end_from_hand",
     "hand_at",
     "hole_frame_offset",
     "pin_destination",
     "plan_approach",
-    "transform_end_hand",
 ]
 
 APPROACH_CLEARANCE = 1e-3
@@ -60,11 +60,9 @@ APPROACH_CLEARANCE = 1e-3
 this far past the seat, beyond the certified Δz (the gross-motion sweeps' clearance)."""
 
 
-def pin_destination(ctx: PlanContext, label: str, transform_hole_end: pin.SE3) -> Destination:
-    """``PIN1 = BH1 * xf`` with ``xf = transform_hole_end ∘ T_pin_end⁻¹`` (seed L1912–1925)."""
-    return Destination(
-        label, ctx.pin_al, ctx.hole_al, transform_hole_end * ctx.transform_pin_end.inverse()
-    )
+def pin_destination(ctx: PlanContext, label: str, hole_from_end: pin.SE3) -> Destination:
+    """``PIN1 = BH1 * xf`` with ``xf = hole_from_end ∘ T_pin_end⁻¹`` (seed L1912–1925)."""
+    return Destination(label, ctx.pin_al, ctx.hole_al, hole_from_end * ctx.pin_from_end.inverse())
 
 
 @dataclass(frozen=True, eq=False)
@@ -184,7 +182,7 @@ def plan_approach(ctx: PlanContext, pickup: Pickup) -> Candidate | Rejection:
         ctx.arm,
         q_app,
         ctx.world_hole.inverse(),
-        transform_end_hand(ctx, grasp).inverse(),
+        end_from_hand(ctx, grasp).inverse(),
         standoff,
         dtry,
         d_f,

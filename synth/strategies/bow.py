@@ -68,8 +68,8 @@ def axis_heights(standoff: float, dtry: float, vias: int) -> tuple[float, ...]:
 def path_bow(
     arm: Arm,
     configurations: Sequence[Configuration],
-    transform_hole_world: pin.SE3,
-    transform_hand_end: pin.SE3,
+    hole_from_world: pin.SE3,
+    hand_from_end: pin.SE3,
     floor: float,
     samples: int = SAMPLES,
 ) -> float:
@@ -81,7 +81,7 @@ def path_bow(
     for q0, q1 in itertools.pairwise(configurations):
         delta = np.asarray(q1) - np.asarray(q0)
         for s in np.linspace(0.0, 1.0, samples + 1):
-            end = transform_hole_world * arm.forward(q0 + s * delta) * transform_hand_end
+            end = hole_from_world * arm.forward(q0 + s * delta) * hand_from_end
             p = np.asarray(end.translation, dtype=float)
             if p[2] >= floor:
                 worst = max(worst, math.hypot(float(p[0]), float(p[1])))
@@ -110,8 +110,8 @@ def plan_axis_path(
     solve: Callable[[float, Configuration], Configuration | None],
     arm: Arm,
     q_approach: Configuration,
-    transform_hole_world: pin.SE3,
-    transform_hand_end: pin.SE3,
+    hole_from_world: pin.SE3,
+    hand_from_end: pin.SE3,
     standoff: float,
     dtry: float,
     d_f: float,
@@ -133,7 +133,7 @@ def plan_axis_path(
                 break
             path.append(q)
         else:
-            bow = path_bow(arm, path, transform_hole_world, transform_hand_end, -d_f)
+            bow = path_bow(arm, path, hole_from_world, hand_from_end, -d_f)
             made = AxisPath(heights, tuple(path), bow)
             if best is None or bow < best.bow:
                 best = made

@@ -192,7 +192,7 @@ class GrossMotionCheck:
         ``hand_error`` is the arm's positioning error block; ``q_reference`` the configuration
         at which the moving bodies' distances from the hand are measured (the park).
         """
-        model = WorkcellModel(graph, [arm.transform_world_base.translation])
+        model = WorkcellModel(graph, [arm.world_from_base.translation])
         workcell = model.place(NominalPoses(graph))
         carried = model.pins[pin_frame]
         pin_standing = model.pin_obstacle(pin_frame, graph.world_from(pin_frame))
@@ -302,11 +302,11 @@ class GrossMotionCheck:
 
     def holding(self, grasp: Grasp) -> CollisionScene:
         """The arm holding the pin by ``grasp``, fingers closed on it."""
-        transform_hand_pin = grasp.pin_from_hand().inverse()
-        key = ("holding", tuple(np.round(transform_hand_pin.homogeneous, 9).reshape(-1)))
+        hand_from_pin = grasp.pin_from_hand().inverse()
+        key = ("holding", tuple(np.round(hand_from_pin.homogeneous, 9).reshape(-1)))
         scene = self._scenes.get(key)
         if scene is None:
-            held = HeldObject(self.carried.name, self.carried.geometry, transform_hand_pin)
+            held = HeldObject(self.carried.name, self.carried.geometry, hand_from_pin)
             scene = CollisionScene(
                 self.arm,
                 self.solids,

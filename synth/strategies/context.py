@@ -83,7 +83,7 @@ class PlanContext:
     ``pin_frame``, ``hole_frame``, ``start_hole`` are frame names; ``pin_al``, ``hole_al``,
     ``hand_al`` AL names. ``d_i`` [m] is how deep the pin sits in its start hole (tip first,
     seed L2036); ``target_end`` says which end goes into the target hole and
-    ``transform_pin_end`` is that end's frame in the pin frame (z out of the hole once
+    ``pin_from_end`` is that end's frame in the pin frame (z out of the hole once
     inserted). ``q_park`` is the arm at the park frame.
     """
 
@@ -104,7 +104,7 @@ class PlanContext:
     q_park: Configuration
     d_i: float
     target_end: PinEnd
-    transform_pin_end: pin.SE3
+    pin_from_end: pin.SE3
     base_world: World
     gross: GrossMotionCheck
     counters: PlanCounters = field(default_factory=PlanCounters)
@@ -135,16 +135,14 @@ class PlanContext:
         """Nominal initial pose of the pin in the world."""
         return self.graph.world_from(self.pin_frame)
 
-    def nearest(self, transform_world_hand: pin.SE3, q_from: Configuration) -> Configuration | None:
+    def nearest(self, world_from_hand: pin.SE3, q_from: Configuration) -> Configuration | None:
         """The configuration reaching a pose with the smallest largest joint change from ``q_from``.
 
         :func:`synth.models.arm.nearest_solution`, the rule the replay moves by: consecutive
         points of a move stay on one arm branch (counted as one IK call).
         """
         self.counters.ik += 1
-        return nearest_solution(
-            self.arm, self.arm.inverse(transform_world_hand, hint=q_from), q_from
-        )
+        return nearest_solution(self.arm, self.arm.inverse(world_from_hand, hint=q_from), q_from)
 
     def motion(self, waypoints: list[Configuration]) -> float:
         """Duration [s] of a move through ``waypoints`` by the configured rule (one call)."""
@@ -164,14 +162,14 @@ class PlanContext:
         return bound_linear(objective, space)
 
 
-def transform_end_hand(ctx: PlanContext, grasp: Grasp) -> pin.SE3:
+def end_from_hand(ctx: PlanContext, grasp: Grasp) -> pin.SE3:
     """The hand in the frame of the inserted pin end: ``T_pin_end⁻¹ ∘ T_pin_hand``."""
-    return ctx.transform_pin_end.inverse() * grasp.pin_from_hand()
+    return ctx.pin_from_end.inverse() * grasp.pin_from_hand()
 
 
-def hand_at(ctx: PlanContext, grasp: Grasp, transform_hole_end: pin.SE3) -> pin.SE3:
-    """World pose of the hand when the pin end is at ``transform_hole_end`` (hole frame)."""
-    return ctx.world_hole * transform_hole_end * transform_end_hand(ctx, grasp)
+def hand_at(ctx: PlanContext, grasp: Grasp, hole_from_end: pin.SE3) -> pin.SE3:
+    """World pose of the hand when the pin end is at ``hole_from_end`` (hole frame)."""
+    return ctx.world_hole * hole_from_end * end_from_hand(ctx, grasp)
 
 
 def _require(spec: TaskSpec) -> None:
@@ -193,15 +191,15 @@ def start_depth(graph: AttributeGraph, start_hole: str, pin_frame: str) -> float
     (seed L2036: "the origin of the pin's coordinate system is at the pin tip inserted into the
     hole"); then ``d_i = −z`` of the tip in the hole frame.
     """
-    transform_hole_pin = graph.relative(start_hole, pin_frame)
-    axis = transform_hole_pin.rotation[:, 2]
+    hole_from_pin = graph.relative(start_hole, pin_frame)
+    axis = hole_from_pin.rotation[:, 2]
     if float(axis[2]) < math.cos(math.radians(1.0)):
         raise SpecError(
             f"frames.{pin_frame}",
             f"the pin must stand tip first in its start hole {start_hole!r} with its axis along "
             "the hole's normal (seed L2036)",
         )
-    return -float(transform_hole_pin.translation[2])
+    return -float(hole_from_pin.translation[2])
 
 
 def pin_end_frame(pin_shape: PinShape, end: PinEnd) -> pin.SE3:
@@ -215,7 +213,7 @@ def pin_end_frame(pin_shape: PinShape, end: PinEnd) -> pin.SE3:
     return pin.SE3(pin.exp3(np.array([math.pi, 0.0, 0.0])), np.array([0.0, 0.0, pin_shape.length]))
 
 
-def build_context(
+def plan_context(
     spec: TaskSpec,
     options: PlanOptions | None = None,
     base_dir: Path | str | None = None,
@@ -278,7 +276,7 @@ def build_context(
         q_park=q_park,
         d_i=d_i,
         target_end=end,
-        transform_pin_end=pin_end_frame(pin_shape, end),
+        pin_from_end=pin_end_frame(pin_shape, end),
         base_world=World.root(facts, label="task"),
         gross=GrossMotionCheck.of(arm, graph, insertion.pin, manip.hand_error, q_park),
         counters=counters,

@@ -97,12 +97,12 @@ def fine_motion_obstruction(
             return reason
     tap = strategy.tap
     if tap is not None:
-        transform_pin_hand = grasp.pin_from_hand()
-        q_via = ctx.nearest(_pin_world(ctx, tap.via) * transform_pin_hand, cand.pickup.q_departure)
+        pin_from_hand = grasp.pin_from_hand()
+        q_via = ctx.nearest(_pin_world(ctx, tap.via) * pin_from_hand, cand.pickup.q_departure)
         q_tap = (
             None
             if q_via is None
-            else ctx.nearest(_pin_world(ctx, tap.place) * transform_pin_hand, q_via)
+            else ctx.nearest(_pin_world(ctx, tap.place) * pin_from_hand, q_via)
         )
         if q_via is None or q_tap is None:
             return f"no arm solution at the tap on {tap.surface}"

@@ -171,8 +171,8 @@ def grasp_relation(ctx: PlanContext, grasp: Grasp, *, hand_error: bool = True) -
         owner = f"{ctx.hand_al}@grasp"
         index = builder.block("hand:grasp", lambda: ParameterBlock.from_uncertainty(owner, unc))
         terms.append(Perturbation(index, inverse=True))
-    transform_world_hand = ctx.world_pin * grasp.pin_from_hand()
-    terms.append(Fixed(transform_world_hand.inverse()))
+    world_from_hand = ctx.world_pin * grasp.pin_from_hand()
+    terms.append(Fixed(world_from_hand.inverse()))
     terms += to_pin
     terms.append(Fixed(_translation(grasp.distance)))
     return ErrorChain(builder.space(), tuple(terms))
@@ -414,7 +414,7 @@ def _translation(z: float) -> pin.SE3:
     return pin.SE3(np.eye(3), np.array([0.0, 0.0, z]))
 
 
-def transform_pin_approach(grasp: Grasp, distance: float) -> pin.SE3:
+def pin_from_approach(grasp: Grasp, distance: float) -> pin.SE3:
     """The grasp's approach point in the pin frame: ``T_pin_hand ∘ trans(0, 0, −a)`` [m].
 
     The hand backs off ``a`` along its own approach vector (Fig. 4.2): for ω = 90°, γ = 135°,
@@ -539,7 +539,7 @@ def reached_grasp(
     the grasp (L2096); with several solutions (wrist flips) the one rated here is the one the
     arm will be in, so the rating, the timing and the swept path agree with the program.
     """
-    approach_xf = transform_pin_approach(grasp, ctx.options.grasp_approach_distance)
+    approach_xf = pin_from_approach(grasp, ctx.options.grasp_approach_distance)
     q_approach = ctx.nearest(ctx.world_pin * approach_xf, ctx.q_park)
     if q_approach is None:
         return Rejection(grasp_label(grasp), "no arm solution at the grasp's approach point")
@@ -561,10 +561,10 @@ def _pickup(
 ) -> Pickup | Rejection:
     """Departure point, the gross-motion check and the pickup's time (§4.3.3)."""
     opts = ctx.options
-    transform_pin_hand = grasp.pin_from_hand()
-    approach_xf = transform_pin_approach(grasp, opts.grasp_approach_distance)
+    pin_from_hand = grasp.pin_from_hand()
+    approach_xf = pin_from_approach(grasp, opts.grasp_approach_distance)
     lift = opts.departure_lift + ctx.d_i
-    q_departure = ctx.nearest(ctx.world_pin * _translation(lift) * transform_pin_hand, q_grasp)
+    q_departure = ctx.nearest(ctx.world_pin * _translation(lift) * pin_from_hand, q_grasp)
     if q_departure is None:
         return Rejection(grasp_label(grasp), "no arm solution at the departure point")
     blocked = ctx.obstruction(
@@ -582,7 +582,7 @@ def _pickup(
         object=pin_al,
         grasp=grasp,
         approach_point=Destination("approach", hand_al, pin_al, approach_xf),
-        grasp_point=Destination("grasp", hand_al, pin_al, transform_pin_hand),
+        grasp_point=Destination("grasp", hand_al, pin_al, pin_from_hand),
         departure_point=Destination("departure", pin_al, pin_al, _translation(lift)),
         approach_opening=approach_opening,
         grasp_opening=grasp_opening,

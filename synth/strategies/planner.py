@@ -24,7 +24,7 @@ from synth.exceptions import NoStrategyError
 from synth.models.spec import TaskSpec
 from synth.strategies.approach import Candidate, plan_approach
 from synth.strategies.causes import root_cause
-from synth.strategies.context import build_context
+from synth.strategies.context import plan_context
 from synth.strategies.grasp import generate_pickups
 from synth.strategies.options import PlanOptions
 from synth.strategies.records import PinInHoleStrategy, PlanResult, Rejection
@@ -67,7 +67,7 @@ def plan_task(
     ``q_start`` is the arm's first configuration (default: at the park frame).
     """
     start = time.perf_counter()
-    ctx = build_context(spec, options, base_dir, q_start)
+    ctx = plan_context(spec, options, base_dir, q_start)
     hopeless = hole_tilt_problem(ctx)
     if hopeless is not None:
         raise NoStrategyError(spec.name, (hopeless,), root_cause([hopeless]))

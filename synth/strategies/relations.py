@@ -98,7 +98,7 @@ def frame_inverse_terms(graph: AttributeGraph, frame: str, builder: SpaceBuilder
 def held_end_terms(
     ctx: PlanContext,
     world: World,
-    transform_world_hand: pin.SE3,
+    world_from_hand: pin.SE3,
     builder: SpaceBuilder,
     hand_key: str,
 ) -> list[Term]:
@@ -109,7 +109,7 @@ def held_end_terms(
     the pin's error in the hand.
     """
     grasp = world.get(Affixed, ctx.pin_al, ctx.hand_al).grasp
-    terms: list[Term] = [Fixed(transform_world_hand)]
+    terms: list[Term] = [Fixed(world_from_hand)]
     if ctx.hand_error is not None and ctx.hand_error.bounds():
         unc = ctx.hand_error
         owner = f"{ctx.hand_al}@{hand_key.split(':')[-1]}"
@@ -120,14 +120,14 @@ def held_end_terms(
     if bounds:
         index = builder.block("grasp", lambda: box_block(f"{ctx.pin_al}@grasp", bounds))
         terms.append(Perturbation(index))
-    terms.append(Fixed(ctx.transform_pin_end))
+    terms.append(Fixed(ctx.pin_from_end))
     return terms
 
 
-def hand_for_end(ctx: PlanContext, world: World, transform_world_end: pin.SE3) -> pin.SE3:
-    """Nominal world pose of the hand holding the pin end at ``transform_world_end``."""
+def hand_for_end(ctx: PlanContext, world: World, world_from_end: pin.SE3) -> pin.SE3:
+    """Nominal world pose of the hand holding the pin end at ``world_from_end``."""
     grasp = world.get(Affixed, ctx.pin_al, ctx.hand_al).grasp
-    return transform_world_end * ctx.transform_pin_end.inverse() * grasp.pin_from_hand()
+    return world_from_end * ctx.pin_from_end.inverse() * grasp.pin_from_hand()
 
 
 def approach_standoff(ctx: PlanContext, world: World) -> float:
@@ -214,8 +214,8 @@ def tap_relations(
     )
     contact: list[Term] = [Fixed(point.inverse()), *hole_terms]
     contact += [Fixed(nominal_tap), Perturbation(m_index)]
-    transform_end_hand = hand_for_end(ctx, world, pin.SE3.Identity())
-    contact += held_end_terms(ctx, world, transform_end_hand, builder, tap_key)
+    end_from_hand = hand_for_end(ctx, world, pin.SE3.Identity())
+    contact += held_end_terms(ctx, world, end_from_hand, builder, tap_key)
     space = builder.space()
     return TapRelations(
         ErrorChain(space, tuple(insertion)),

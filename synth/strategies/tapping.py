@@ -204,10 +204,10 @@ def plan_tap(ctx: PlanContext, cand: Candidate, footprint: ErrorFootprint) -> Ta
     hole_shape = ctx.hole_shape
     surface = ctx.graph.resolve(hole_shape.surface)
     region = surface_region(ctx.graph, surface)
-    transform_surface_hole = ctx.graph.relative(surface, ctx.hole_frame)
+    surface_from_hole = ctx.graph.relative(surface, ctx.hole_frame)
     hole_xy = (
-        float(transform_surface_hole.translation[0]),
-        float(transform_surface_hole.translation[1]),
+        float(surface_from_hole.translation[0]),
+        float(surface_from_hole.translation[1]),
     )
     r_td = hole_shape.diameter / 2 + ctx.pin_shape.tip_radius
     dr_td = max(opts.tap_ring_min, footprint.dx, footprint.dy)
@@ -223,7 +223,7 @@ def plan_tap(ctx: PlanContext, cand: Candidate, footprint: ErrorFootprint) -> Ta
             f"{ctx.graph.al_names[surface]} is {100 * need:.3f} cm clear of holes and edges "
             "(seed L2363)",
         )
-    in_hole = transform_surface_hole.inverse().act(np.array([place.x, place.y, 0.0]))
+    in_hole = surface_from_hole.inverse().act(np.array([place.x, place.y, 0.0]))
     offset = (float(in_hole[0]), float(in_hole[1]), 0.0)
     phi = cand.strategy.phi
     world = cand.world.with_facts(TapAt(ctx.pin_al, ctx.graph.al_names[surface], offset))

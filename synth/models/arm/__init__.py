@@ -182,7 +182,7 @@ def load_arm(
         return load_builtin_arm(
             arm_spec.model,
             hand_spec,
-            transform_world_base=base,
+            world_from_base=base,
             tool_frame=arm_spec.tool_frame,
             tool_offset=given_offset,
             velocity=arm_spec.velocity_limits,
@@ -206,7 +206,7 @@ def load_arm(
         arm_spec.tool_frame,
         hand_spec,
         package_dirs=[str(root / d) for d in arm_spec.package_dirs],
-        transform_world_base=base,
+        world_from_base=base,
         tool_offset=offset,
         srdf=None if arm_spec.srdf is None else root / arm_spec.srdf,
         velocity=arm_spec.velocity_limits,

@@ -29,7 +29,7 @@ class ClosedFormInverse(Protocol):
     """
 
     def __call__(
-        self, transform_world_hand: pin.SE3, hint: ArrayLike | None = None
+        self, world_from_hand: pin.SE3, hint: ArrayLike | None = None
     ) -> list[NDArray[np.float64]]:
         """Every attainable solution."""
         ...
@@ -56,7 +56,7 @@ class Arm:
     limits: JointLimits
     hand: HandSpec
     bodies: tuple[Body, ...]
-    transform_world_base: pin.SE3
+    world_from_base: pin.SE3
     disabled_pairs: frozenset[frozenset[str]] = frozenset()
     closed_form: ClosedFormInverse | None = None
     grasp_joint: int | None = None
@@ -91,12 +91,12 @@ class Arm:
 
     def inverse(
         self,
-        transform_world_hand: pin.SE3,
+        world_from_hand: pin.SE3,
         *,
         hint: ArrayLike | None = None,
         rng: np.random.Generator | None = None,
     ) -> list[NDArray[np.float64]]:
-        """Return configurations reaching ``transform_world_hand`` (empty when none is found).
+        """Return configurations reaching ``world_from_hand`` (empty when none is found).
 
         With a closed form every attainable solution is returned (in the closed form's order);
         otherwise the multi-start DLS solver's distinct solutions, sorted by distance to
@@ -104,8 +104,8 @@ class Arm:
         are reproducible).
         """
         if self.closed_form is not None:
-            return self.closed_form(transform_world_hand, hint=hint)
+            return self.closed_form(world_from_hand, hint=hint)
         from synth.models.arm.ik import build_ik, solve_ik_all
 
-        problem = build_ik(self, transform_world_hand, hint=hint)
+        problem = build_ik(self, world_from_hand, hint=hint)
         return solve_ik_all(problem, rng if rng is not None else np.random.default_rng(0))

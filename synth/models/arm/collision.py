@@ -92,12 +92,12 @@ class HeldObject:
 
     name: str
     geometry: coal.CollisionGeometry
-    transform_hand_object: pin.SE3
+    hand_from_object: pin.SE3
 
     @staticmethod
-    def of(name: str, geometry: Geometry, transform_hand_object: pin.SE3) -> HeldObject:
+    def of(name: str, geometry: Geometry, hand_from_object: pin.SE3) -> HeldObject:
         """Make a held object from a Coal shape or trimesh mesh."""
-        return HeldObject(name, coal_geometry(geometry), transform_hand_object.copy())
+        return HeldObject(name, coal_geometry(geometry), hand_from_object.copy())
 
 
 EnvironmentItem = Obstacle | tuple[str, Geometry, pin.SE3]
@@ -232,7 +232,7 @@ class CollisionScene:
         for body in arm.bodies:
             bodies.append(body_at_opening(arm, body, self.opening))
         if self.held is not None:
-            placement = hand_frame.placement * self.held.transform_hand_object
+            placement = hand_frame.placement * self.held.hand_from_object
             bodies.append(
                 Body(
                     self.held.name,
@@ -302,7 +302,7 @@ class CollisionScene:
             if body.role == "environment":
                 placement = moved[body.name]
             elif body.role == "held" and held is not None:
-                placement = hand_frame.placement * held.transform_hand_object
+                placement = hand_frame.placement * held.hand_from_object
             else:
                 continue
             bodies[i] = Body(body.name, body.joint, body.link, placement, body.geometry, body.role)

@@ -39,9 +39,9 @@ def palm_top(hand: HandSpec) -> float:
 
 
 def hand_bodies(
-    hand: HandSpec, joint: int, link: str, transform_joint_hand: pin.SE3, opening: float
+    hand: HandSpec, joint: int, link: str, joint_from_hand: pin.SE3, opening: float
 ) -> list[Body]:
-    """Palm and finger bodies carried by ``joint``, the hand frame at ``transform_joint_hand``."""
+    """Palm and finger bodies carried by ``joint``, the hand frame at ``joint_from_hand``."""
     if not 0.0 <= opening <= hand.max_opening + 1e-12:
         raise ValueError(f"opening {opening} m outside [0, {hand.max_opening}] m")
     finger = (
@@ -55,12 +55,12 @@ def hand_bodies(
             PALM,
             joint,
             link,
-            transform_joint_hand * pin.SE3(np.eye(3), palm_centre),
+            joint_from_hand * pin.SE3(np.eye(3), palm_centre),
             coal.Box(*hand.palm_size),
             "hand",
         )
     ]
     for name, side in zip(FINGERS, (-1, 1), strict=True):
-        placement = transform_joint_hand * finger_placement(hand, side, opening)  # type: ignore[arg-type]
+        placement = joint_from_hand * finger_placement(hand, side, opening)  # type: ignore[arg-type]
         bodies.append(Body(name, joint, link, placement, coal.Box(*finger), "hand"))
     return bodies

@@ -193,7 +193,7 @@ class RatedSolution:
 
 def best_solution(
     arm: Arm,
-    transform_world_hand: pin.SE3,
+    world_from_hand: pin.SE3,
     rating: SolutionRating | None = None,
     hint: ArrayLike | None = None,
     rng: np.random.Generator | None = None,
@@ -203,17 +203,17 @@ def best_solution(
     Raises :class:`~synth.exceptions.UnreachableError` with the pose and the reason (no
     attainable closed-form solution inside the joint limits, or none found by the DLS solver).
     """
-    solutions = arm.inverse(transform_world_hand, hint=hint, rng=rng)
+    solutions = arm.inverse(world_from_hand, hint=hint, rng=rng)
     if not solutions:
         reason = (
             "no attainable solution inside the joint limits (closed form)"
             if arm.closed_form is not None
             else "the DLS solver found no solution from its starts"
         )
-        t = transform_world_hand.translation
+        t = world_from_hand.translation
         raise UnreachableError(
             (float(t[0]), float(t[1]), float(t[2])),
-            tuple(float(v) for v in transform_world_hand.rotation.reshape(-1)),
+            tuple(float(v) for v in world_from_hand.rotation.reshape(-1)),
             reason,
         )
     return rank_solutions(arm, solutions, rating)[0]

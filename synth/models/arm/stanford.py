@@ -165,7 +165,7 @@ def load_stanford_parameters(path: Path | str | None = None) -> StanfordParamete
 
 
 def build_stanford_model(
-    params: StanfordParameters, transform_world_base: pin.SE3 | None = None
+    params: StanfordParameters, world_from_base: pin.SE3 | None = None
 ) -> pin.Model:
     """Build the Pinocchio model of eqs. (2)–(13), base at T_world_base, with a ``hand`` frame.
 
@@ -173,7 +173,7 @@ def build_stanford_model(
     θ2 at trans(0, S2, 0) about y; S3 along z; θ4 at rot(z, −90°) about z (the seed's frame 3
     has x3 = −y of the θ2 frame, L995); θ5 about y; θ6 about z; hand = trans(0, 0, S6).
     """
-    t_wb = pin.SE3.Identity() if transform_world_base is None else transform_world_base
+    world_from_base = pin.SE3.Identity() if world_from_base is None else world_from_base
     lim = params.limits
     model = pin.Model()
     model.name = "stanford"
@@ -186,14 +186,14 @@ def build_stanford_model(
         pin.JointModelRZ(),
     )
     placements = (
-        t_wb * pin.SE3(np.eye(3), np.array([0.0, 0.0, params.s1])),
+        world_from_base * pin.SE3(np.eye(3), np.array([0.0, 0.0, params.s1])),
         pin.SE3(np.eye(3), np.array([0.0, params.s2, 0.0])),
         pin.SE3.Identity(),
         pin.SE3(_RZ_MINUS_90, np.zeros(3)),
         pin.SE3.Identity(),
         pin.SE3.Identity(),
     )
-    model.addFrame(pin.Frame(LINK_NAMES[0], 0, 0, t_wb, pin.FrameType.BODY))
+    model.addFrame(pin.Frame(LINK_NAMES[0], 0, 0, world_from_base, pin.FrameType.BODY))
     parent = 0
     for k, (jm, placement) in enumerate(zip(joint_models, placements, strict=True)):
         parent = model.addJoint(
@@ -388,47 +388,52 @@ class StanfordInverse:
     """
 
     params: StanfordParameters
-    transform_world_base: pin.SE3
+    world_from_base: pin.SE3
     tool_offset: pin.SE3 = field(default_factory=pin.SE3.Identity)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "_base_inv", self.transform_world_base.inverse())
+        object.__setattr__(self, "_base_inv", self.world_from_base.inverse())
         object.__setattr__(self, "_tool_inv", self.tool_offset.inverse())
 
     def __call__(
-        self, transform_world_hand: pin.SE3, hint: ArrayLike | None = None
+        self, world_from_hand: pin.SE3, hint: ArrayLike | None = None
     ) -> list[NDArray[np.float64]]:
         """Every attainable solution (seed eqs. 14–32 and the joint limits).
 
         ``hint`` is unused: no Stanford joint turns through more than 2π (L963), so a solution
         has no whole-turn aliases to choose among.
         """
-        t = self._base_inv * transform_world_hand * self._tool_inv  # type: ignore[attr-defined]
+        t = self._base_inv * world_from_hand * self._tool_inv  # type: ignore[attr-defined]
         return stanford_inverse(self.params, t.rotation, t.translation)
 
 
 def build_stanford_arm(
     hand: HandSpec,
-    transform_world_base: pin.SE3 | None = None,
+    world_from_base: pin.SE3 | None = None,
     params: StanfordParameters | None = None,
     tool_offset: pin.SE3 | None = None,
 ) -> Arm:
     """Build the Stanford arm: model, closed-form inverse, link and hand bodies.
 
-    ``transform_world_base`` defaults to the parameter file's ``default_base`` (the placement
+    ``world_from_base`` defaults to the parameter file's ``default_base`` (the placement
     chosen for the seed's workcell); ``tool_offset`` moves AL's hand frame off Paul's T6.
     """
     p = params if params is not None else load_stanford_parameters()
-    t_wb = pose_to_se3(p.default_base) if transform_world_base is None else transform_world_base
+    world_from_base = pose_to_se3(p.default_base) if world_from_base is None else world_from_base
     offset = pin.SE3.Identity() if tool_offset is None else tool_offset
-    model = build_stanford_model(p, t_wb)
+    model = build_stanford_model(p, world_from_base)
     t6 = model.frames[model.getFrameId(HAND_FRAME)]
     if not np.allclose(offset.homogeneous, np.eye(4)):
         t6.placement = t6.placement * offset
     joint6 = int(t6.parentJoint)
     bodies = stanford_link_bodies(p, hand)
     bodies[0] = Body(
-        bodies[0].name, 0, bodies[0].link, t_wb * bodies[0].placement, bodies[0].geometry, "arm"
+        bodies[0].name,
+        0,
+        bodies[0].link,
+        world_from_base * bodies[0].placement,
+        bodies[0].geometry,
+        "arm",
     )
     bodies += hand_bodies(hand, joint6, HAND_FRAME, t6.placement, hand.max_opening)
     return Arm(
@@ -438,7 +443,7 @@ def build_stanford_arm(
         limits=p.limits,
         hand=hand,
         bodies=tuple(bodies),
-        transform_world_base=t_wb,
-        closed_form=StanfordInverse(p, t_wb, offset),
+        world_from_base=world_from_base,
+        closed_form=StanfordInverse(p, world_from_base, offset),
         grasp_joint=THETA5,
     )

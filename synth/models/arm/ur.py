@@ -51,21 +51,21 @@ class URInverse:
     """
 
     solver: ModuleType
-    transform_world_dh: pin.SE3
-    transform_tool0_hand: pin.SE3
+    world_from_dh: pin.SE3
+    tool0_from_hand: pin.SE3
     limits: JointLimits
     _inverse: tuple[pin.SE3, pin.SE3] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        inverse = (self.transform_world_dh.inverse(), self.transform_tool0_hand.inverse())
+        inverse = (self.world_from_dh.inverse(), self.tool0_from_hand.inverse())
         object.__setattr__(self, "_inverse", inverse)
 
     def __call__(
-        self, transform_world_hand: pin.SE3, hint: ArrayLike | None = None
+        self, world_from_hand: pin.SE3, hint: ArrayLike | None = None
     ) -> list[NDArray[np.float64]]:
         """Every attainable solution, each joint at its alias nearest ``hint`` when given."""
         dh_inv, hand_inv = self._inverse
-        target = (dh_inv * transform_world_hand * hand_inv).homogeneous
+        target = (dh_inv * world_from_hand * hand_inv).homogeneous
         raw = self.solver.inverse_kinematics(np.ascontiguousarray(target))
         if not raw:
             return []

@@ -59,7 +59,7 @@ def joint_kinds(model: pin.Model, source: str = "") -> tuple[JointKind, ...]:
 
 
 def place_base(
-    model: pin.Model, geometry: pin.GeometryModel | None, transform_world_base: pin.SE3
+    model: pin.Model, geometry: pin.GeometryModel | None, world_from_base: pin.SE3
 ) -> None:
     """Fold T_world_base into a model built in its base frame (in place).
 
@@ -68,14 +68,14 @@ def place_base(
     """
     for j in range(1, model.njoints):
         if model.parents[j] == 0:
-            model.jointPlacements[j] = transform_world_base * model.jointPlacements[j]
+            model.jointPlacements[j] = world_from_base * model.jointPlacements[j]
     for frame in model.frames:
         if frame.parentJoint == 0:
-            frame.placement = transform_world_base * frame.placement
+            frame.placement = world_from_base * frame.placement
     if geometry is not None:
         for obj in geometry.geometryObjects:
             if obj.parentJoint == 0:
-                obj.placement = transform_world_base * obj.placement
+                obj.placement = world_from_base * obj.placement
 
 
 def disabled_link_pairs(
@@ -132,7 +132,7 @@ def load_urdf_arm(
     hand: HandSpec,
     *,
     package_dirs: Sequence[str] = (),
-    transform_world_base: pin.SE3 | None = None,
+    world_from_base: pin.SE3 | None = None,
     tool_offset: pin.SE3 | None = None,
     srdf: Path | str | None = None,
     velocity: Sequence[float] | None = None,
@@ -166,8 +166,8 @@ def load_urdf_arm(
         locked = [model.getJointId(f.name) for f in finger_joints]
         model, geometry = pin.buildReducedModel(model, geometry, locked, pin.neutral(model))
     kinds = joint_kinds(model, source)
-    t_wb = pin.SE3.Identity() if transform_world_base is None else transform_world_base
-    place_base(model, geometry, t_wb)
+    world_from_base = pin.SE3.Identity() if world_from_base is None else world_from_base
+    place_base(model, geometry, world_from_base)
 
     tool = model.frames[model.getFrameId(tool_frame)]
     hand_placement = tool.placement * offset
@@ -231,7 +231,7 @@ def load_urdf_arm(
         limits=limits,
         hand=hand,
         bodies=tuple(bodies),
-        transform_world_base=t_wb,
+        world_from_base=world_from_base,
         disabled_pairs=(
             disabled_link_pairs(model, geometry, srdf) if srdf is not None else frozenset()
         ),
