@@ -53,6 +53,7 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from synth.models.arm.collision import Obstacle, convex_hull
+from synth.models.spec import DEFAULT_FRICTION
 from synth.models.workcell import HoleSite, PinModel
 from synth.replay.bounds import PinFlight, safe_step
 from synth.replay.capture import TipPlacement, captures, seat_depth, tip_placement
@@ -521,7 +522,7 @@ def _first_contact_flight(
                 hole = holes[index]
                 crossing = _crossing_flight(hole, flight, s, s_next)
                 placement = tip_placement(hole, flight.pose(crossing))
-                if captures(hole, pin_model, placement):
+                if captures(hole, pin_model, placement, _mu(friction)):
                     axis = hole.axis
                     point = hole.world_from_hole.translation.copy()
                     kind = _entry(hole, pin_model, placement, friction)
@@ -647,7 +648,7 @@ def first_contact(
             hole = holes[index]
             crossing = _crossing(hole, pose_at, s, s_next)
             placement = tip_placement(hole, pose_at(crossing))
-            if captures(hole, pin_model, placement):
+            if captures(hole, pin_model, placement, _mu(friction)):
                 axis = hole.axis
                 point = hole.world_from_hole.translation.copy()
                 kind = _entry(hole, pin_model, placement, friction)
@@ -665,6 +666,11 @@ def _crossing(hole: HoleSite, pose_at: PoseAt, lo: float, hi: float) -> float:
         else:
             hi = mid
     return hi
+
+
+def _mu(friction: float | None) -> float:
+    """The task's friction μ for the rim's capture test (the default μ when wedging is off)."""
+    return DEFAULT_FRICTION if friction is None else friction
 
 
 def _entry(
@@ -693,7 +699,8 @@ def _classify(
         if hole.owner != name:
             continue
         placement = tip_placement(hole, pose)
-        if placement.axial <= hole.mouth_radius and captures(hole, pin_.model, placement):
+        inside = placement.axial <= hole.mouth_radius
+        if inside and captures(hole, pin_.model, placement, _mu(friction)):
             kind = _entry(hole, pin_.model, placement, friction)
             return PinContact(s, kind, name, hole, hole.axis, point, local, d)
     # Coal's normal points from the pin to the obstacle; the surface normal is opposite
