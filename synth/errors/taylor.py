@@ -123,14 +123,16 @@ class TaylorModel:
         return TaylorModel(a0 @ b0, lin, rem, self.magnitude)
 
     def __add__(self, other: TaylorModel) -> TaylorModel:
-        value = self.value + other.value
-        linear = self.linear + other.linear
-        # each stored sum is within u of the exact one: |C₀| u, and Σ m_i |C_i| u over the box
-        rounding = UNIT_ROUNDOFF * (
-            np.abs(value) + np.tensordot(self.magnitude, np.abs(linear), axes=1)
+        exact = TaylorModel(
+            self.value + other.value,
+            self.linear + other.linear,
+            self.remainder + other.remainder,
+            self.magnitude,
         )
-        rem = (self.remainder + other.remainder + rounding) * (1.0 + gamma(len(self.magnitude) + 4))
-        return TaylorModel(value, linear, rem, self.magnitude)
+        # each stored sum is within u of the exact one: |C₀| u, and Σ m_i |C_i| u over the box
+        rounding = UNIT_ROUNDOFF * (np.abs(exact.value) + exact.spread())
+        rem = (exact.remainder + rounding) * (1.0 + gamma(len(self.magnitude) + 4))
+        return TaylorModel(exact.value, exact.linear, rem, self.magnitude)
 
     def __neg__(self) -> TaylorModel:
         return TaylorModel(-self.value, -self.linear, self.remainder, self.magnitude)
