@@ -21,6 +21,7 @@ three; the other two keep a program that misbehaves apart from one that gives up
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -90,6 +91,7 @@ class RunReport:
         }
 
 
+@functools.lru_cache(maxsize=1 << 16)
 def wilson_interval(
     successes: int, trials: int, z: float = 1.959963984540054
 ) -> tuple[float, float]:
@@ -97,6 +99,8 @@ def wilson_interval(
 
     scipy's ``binomtest(k, n).proportion_ci(method="wilson")`` at confidence erf(z/√2): centre
     (p̂ + z²/2n)/(1 + z²/n), half-width z·√(p̂(1−p̂)/n + z²/4n²)/(1 + z²/n), p̂ = k/n.
+    Kept per (k, n, z): scipy takes 0.4 ms a call, and a sequential proof asks after every
+    trial for intervals it has mostly asked before.
     """
     if trials <= 0:
         return (0.0, 1.0)
