@@ -123,7 +123,7 @@ def test_pair_rates_bound_the_bodies_relative_motion(cell) -> None:  # type: ign
     # points in each body's ball, fixed in its joint frame, moved along the segment with only
     # the pair's joints (the distance depends on nothing else): their displacement over h is
     # within the sum of both bodies' bounds h·a + ½Ah²
-    from synth.replay.advance import _closing, _measure_pairs
+    from synth.replay.advance import _measure_pairs, closing_rates
     from synth.replay.bounds import curvatures
 
     context, machine = cell
@@ -148,7 +148,7 @@ def test_pair_rates_bound_the_bodies_relative_motion(cell) -> None:  # type: ign
         s = float(rng.uniform(0.0, 0.8))
         h = float(rng.uniform(0.0, 0.2))
         here = _measure_pairs(scene, seg.q0 + s * delta, exact_below, np.array([k]))
-        rate = float(_closing(here, motion, sides, signed)[0])
+        rate = float(closing_rates(here, motion, sides, signed)[0])
         moved = 0.0
         for side, body in enumerate(sides[0]):
             direction = rng.normal(size=(3, 50))
@@ -248,8 +248,11 @@ def test_fast_sweeps_never_step_over_half_the_clearance(cell) -> None:  # type: 
         if np.min(scene.distances(q0)) <= clearance:
             continue  # starts in contact: the relaxed clearance applies, tested elsewhere
         result = fast_sweep(scene, chain, q0, q1, options)
+        # distance_bounds is exact wherever a pair is within the clearance (meshes), a lower
+        # bound elsewhere, so `truth` decides both tests below as the exact minimum would
         truth = min(
-            float(np.min(scene.distances(q0 + x * (q1 - q0)))) for x in np.linspace(0, 1, 400)
+            float(np.min(scene.distance_bounds(q0 + x * (q1 - q0), exact_below=clearance)))
+            for x in np.linspace(0, 1, 400)
         )
         if truth > clearance + 1e-6:
             assert result.free

@@ -55,7 +55,7 @@ from synth.models.arm.bodies import bounding_radius
 from synth.replay.bounds import ArmChain, curvatures
 from synth.replay.contact import GJK_MARGIN
 
-__all__ = ["PairMotion", "fast_sweep", "two_ended_floor"]
+__all__ = ["Ends", "PairMotion", "below_gap", "closing_rates", "fast_sweep", "two_ended_floor"]
 
 _SLACK = 1e-5
 """[m] kept in hand below every bound on a measured gap: ten times Coal's GJK tolerance."""
@@ -148,7 +148,7 @@ class PairMotion:
 
 
 @dataclass(eq=False)
-class _Ends:
+class Ends:
     """Every pair measured at one configuration, with the joint Jacobian there.
 
     ``d`` [m]: each pair's value of :meth:`CollisionScene.distance_bounds` (its hulls', its
@@ -165,11 +165,11 @@ class _Ends:
     @staticmethod
     def measure(
         scene: CollisionScene, q: NDArray[np.float64], exact_below: NDArray[np.float64]
-    ) -> _Ends:
+    ) -> Ends:
         """All pairs at ``q``: one Coal query of every hull pair, the meshes where needed."""
         key = (scene.bodies, scene.bound_data, scene.geometry_data, exact_below.tobytes())
         cached = getattr(scene, "_fast_ends", None)
-        if isinstance(cached, _Ends) and cached.key == key and np.array_equal(cached.q, q):
+        if isinstance(cached, Ends) and cached.key == key and np.array_equal(cached.q, q):
             return cached
         data = scene.data
         pin.computeJointJacobians(scene.model, data, q)
@@ -185,7 +185,7 @@ class _Ends:
             for k in recheck.tolist():
                 pin.computeDistance(scene.geometry_model, scene.geometry_data, k)
                 d[k] = scene.geometry_data.distanceResults[k].min_distance
-        ends = _Ends(
+        ends = Ends(
             np.array(q),
             d,
             np.array(data.J),
@@ -201,10 +201,10 @@ def _measure_pairs(
     q: NDArray[np.float64],
     exact_below: NDArray[np.float64],
     pairs: NDArray[np.int64],
-) -> _Ends:
+) -> Ends:
     """Only ``pairs`` at ``q``, one query each (fewer than a whole scene's).
 
-    ``d`` in their order; the Jacobian and origins as :meth:`_Ends.measure`.
+    ``d`` in their order; the Jacobian and origins as :meth:`Ends.measure`.
     """
     data = scene.data
     pin.computeJointJacobians(scene.model, data, q)
@@ -226,7 +226,7 @@ def _measure_pairs(
             value = scene.geometry_data.distanceResults[k].min_distance
         d[i] = value
     origins = np.array([m.translation for m in data.oMi])
-    return _Ends(np.array(q), d, np.array(data.J), origins, ())
+    return Ends(np.array(q), d, np.array(data.J), origins, ())
 
 
 _FEW = 12
@@ -269,6 +269,7 @@ def fast_sweep(
     options: SweepOptions,
     *,
     relax: bool = True,
+    only: NDArray[np.int64] | None = None,
 ) -> SweepResult:
     """Check q(s) = q₀ + s·(q₁ − q₀), s ∈ [0, 1], as :func:`swept_segment` (module docstring).
 
@@ -276,36 +277,49 @@ def fast_sweep(
     where the last motion stopped it) is checked with c halved below that start distance, as
     :func:`synth.replay.sweeps.sweep_options` does for the reference path. Without directional
     displacements only (the replay's sweeps): ``options.margins`` are distances every pair adds
-    to the clearance.
+    to the clearance. ``only``: the pairs to check (indices into the scene's pairs; the others
+    proven beyond c already, :mod:`synth.replay.tubes`), measured one by one.
     """
     q0 = np.asarray(q0, dtype=float)
     q1 = np.asarray(q1, dtype=float)
     delta = q1 - q0
-    if not scene.pairs:
+    if not scene.pairs or (only is not None and not len(only)):
         return SweepResult(True, 1.0, q1, None, float("inf"), 0)
     motion = PairMotion.of(scene)
     clearance = options.clearance
-    margins = motion.margins(options)
-    exact_below = clearance + margins
-    start = _Ends.measure(scene, q0, exact_below)
-    if relax and float(np.min(start.d)) < clearance:
-        clearance = max(0.5 * float(np.min(start.d)), 0.0)
+    exact_below = clearance + motion.margins(options)
+    checked = np.arange(len(scene.pairs)) if only is None else np.asarray(only, dtype=np.int64)
+    margins = exact_below[checked] - clearance
+
+    def measured(q: NDArray[np.float64], pairs: NDArray[np.int64]) -> tuple[Ends, NDArray]:
+        """The checked ``pairs`` (indices into ``checked``) at q: their Ends and distances."""
+        if only is None and (pairs is everything or pairs.size >= _FEW):
+            ends = Ends.measure(scene, q, exact_below)
+            return ends, ends.d[checked[pairs]]
+        ends = _measure_pairs(scene, q, exact_below, checked[pairs])
+        return ends, ends.d
+
+    everything = np.arange(checked.size)
+    start, start_d = measured(q0, everything)
+    if relax and float(np.min(start_d)) < clearance:
+        clearance = max(0.5 * float(np.min(start_d)), 0.0)
     slack = min(_SLACK, 0.1 * clearance)
-    signed = delta[None, None, :] * motion.masks  # (pairs, 2, nv)
+    signed = delta[None, None, :] * motion.masks[checked]  # (pairs, 2, nv)
     levers = chain.levers(motion.supports, motion.radii, q0, q1)
-    sides = motion.sides
+    sides = motion.sides[checked]
     curvature = curvatures(chain.revolute, levers[sides[:, 0]], np.abs(signed[:, 0]))
     curvature += curvatures(chain.revolute, levers[sides[:, 1]], np.abs(signed[:, 1]))
-    gap0 = _below_gap(start.d, margins)
-    rate0 = _closing(start, motion, sides, signed)
-    if float(np.min(start.d - margins)) <= clearance:
-        k = int(np.argmin(start.d - margins))
+    gap0 = below_gap(start_d, margins)
+    rate0 = closing_rates(start, motion, sides, signed)
+    if float(np.min(start_d - margins)) <= clearance:
+        k = int(np.argmin(start_d - margins))
+        pair = scene.pairs[int(checked[k])]
         return SweepResult(
-            False, 0.0, q0, scene.pairs[k], float(start.d[k]), 1, float(margins[k]) + clearance
+            False, 0.0, q0, pair, float(start_d[k]), 1, float(margins[k]) + clearance
         )
-    end = _Ends.measure(scene, q1, exact_below)
-    gap1 = _below_gap(end.d, margins)
-    rate1 = _closing(end, motion, sides, signed)
+    end, end_d = measured(q1, everything)
+    gap1 = below_gap(end_d, margins)
+    rate1 = closing_rates(end, motion, sides, signed)
     floor = two_ended_floor(gap0, rate0, gap1, rate1, curvature)
     active = np.flatnonzero(floor - slack <= clearance)
     if not active.size:
@@ -315,8 +329,8 @@ def fast_sweep(
     half = 0.5 * clearance + slack
     margin = margins[active]
     points = [
-        _Point(0.0, q0, start.d[active], gap0[active], rate0[active]),
-        _Point(1.0, q1, end.d[active], gap1[active], rate1[active]),
+        _Point(0.0, q0, start_d[active], gap0[active], rate0[active]),
+        _Point(1.0, q1, end_d[active], gap1[active], rate1[active]),
     ]
     checks, i = 2, 0
     while True:
@@ -330,7 +344,7 @@ def fast_sweep(
             k = int(np.argmin(gaps))
             if gaps[k] <= clearance:
                 need = float(margin[k]) + clearance
-                pair = scene.pairs[int(active[k])]
+                pair = scene.pairs[int(checked[active[k]])]
                 return SweepResult(False, right.s, right.q, pair, float(right.d[k]), checks, need)
             if right.s >= 1.0:
                 return SweepResult(True, 1.0, q1, None, float("inf"), checks)
@@ -340,14 +354,9 @@ def fast_sweep(
             return SweepResult(False, left.s, left.q, None, float("inf"), checks)
         s = 0.5 * (left.s + right.s)
         q = q0 + s * delta
-        here = (
-            _measure_pairs(scene, q, exact_below, active)
-            if active.size < _FEW
-            else _Ends.measure(scene, q, exact_below)
-        )
-        d = here.d if active.size < _FEW else here.d[active]
+        here, d = measured(q, active)
         points.insert(
-            i + 1, _Point(s, q, d, _below_gap(d, margin), _closing(here, motion, sides, signed))
+            i + 1, _Point(s, q, d, below_gap(d, margin), closing_rates(here, motion, sides, signed))
         )
         checks += 1
 
@@ -367,8 +376,8 @@ _FINEST = 1e-12
 """An interval this short is taken as clear: its floor is its ends' values within rounding."""
 
 
-def _closing(
-    ends: _Ends, motion: PairMotion, sides: NDArray[np.int64], signed: NDArray[np.float64]
+def closing_rates(
+    ends: Ends, motion: PairMotion, sides: NDArray[np.int64], signed: NDArray[np.float64]
 ) -> NDArray[np.float64]:
     """Per pair how fast its gap can close at ``ends``' configuration [m per unit s].
 
@@ -393,7 +402,7 @@ def _closing(
     return rate[:count] + rate[count:]
 
 
-def _below_gap(d: NDArray[np.float64], margins: NDArray[np.float64]) -> NDArray[np.float64]:
+def below_gap(d: NDArray[np.float64], margins: NDArray[np.float64]) -> NDArray[np.float64]:
     """Lower bounds on the true gaps from Coal's distances ``d`` (:data:`GJK_MARGIN`)."""
     return d * (1.0 - GJK_MARGIN) - margins
 

@@ -43,6 +43,7 @@ from synth.replay.cell import ReplayOptions
 from synth.replay.motion import Segment, Stop, push_reaction
 from synth.replay.reach import describe_pose
 from synth.replay.report import Violation
+from synth.replay.tubes import Tubes
 
 __all__ = [
     "SweepContext",
@@ -140,11 +141,19 @@ def _swept(
     """The swept check of q0 → q1, its clearance halved below a contact it starts in.
 
     The reference path's (:func:`sweep_options`, :func:`~synth.models.arm.swept_segment`) or
-    the fast path's (:func:`~synth.replay.advance.fast_sweep`).
+    the fast path's: :func:`~synth.replay.advance.fast_sweep` on the pairs that no tube of an
+    earlier sweep keeps clear (:mod:`synth.replay.tubes`); a free sweep that no tube helped
+    leaves one for the next trials.
     """
     if context.options.reference:
         return swept_segment(scene, q0, q1, sweep_options(context.options, scene, q0))
-    return fast_sweep(scene, context.chain, q0, q1, context.options.sweep)
+    options = context.options.sweep
+    tubes = Tubes.of(scene)
+    left = tubes.unproven(scene, context.chain, q0, q1, options.clearance)
+    sweep = fast_sweep(scene, context.chain, q0, q1, options, only=left)
+    if sweep.free and left is None:
+        tubes.build(context.line, scene, context.chain, q0, q1, options)
+    return sweep
 
 
 def _sweep_stop(
