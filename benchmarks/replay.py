@@ -151,9 +151,12 @@ import sys, time
 from pathlib import Path
 import synth
 assert Path(synth.__file__).resolve().parent.parent == Path.cwd().resolve(), synth.__file__
-from synth.replay import build_context, run_trial
+import synth.replay as replay
+from synth.replay import run_trial
+# today's main calls it build_context; this tree, replay_context
+make = getattr(replay, "replay_context", None) or getattr(replay, "build_context")
 text = Path(sys.argv[1]).read_text(encoding="utf-8")
-context = build_context(text, sys.argv[2])
+context = make(text, sys.argv[2])
 run_trial(context, 0, 0)
 n = int(sys.argv[3])
 wall, cpu = time.perf_counter(), time.process_time()
