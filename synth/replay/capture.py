@@ -315,12 +315,14 @@ def entry_contact(hole: HoleSite, pin_model: PinModel, placement: TipPlacement) 
     """Where the pin, let down along the hole's axis, first touches the part (module docstring)."""
     if placement.tilt >= 0.5 * math.pi:
         return EntryContact(None)  # head first or lying down: no tip to enter with
-    c, u = placement.local()
-    solid = _Solid(pin_model, c, u)
     r, w, r_m, depth = hole.radius, hole.chamfer, hole.mouth_radius, hole.depth
-    reach = solid.length * math.sin(placement.tilt) + max(solid.a, solid.b)
+    reach = pin_model.length * math.sin(placement.tilt) + max(
+        pin_model.radius_at(0.0), pin_model.radius
+    )
     if placement.lateral - reach >= r_m:
         return EntryContact(None)  # no point of the pin above the mouth
+    c, u = placement.local()
+    solid = _Solid(pin_model, c, u)
 
     def on_face(height: float, radius: float) -> Callable[[FloatArray], FloatArray]:
         def f(psi: FloatArray) -> FloatArray:  # a rim's drop onto the face, ρ > r_m
