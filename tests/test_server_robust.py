@@ -110,3 +110,22 @@ def test_an_unhandled_error_is_answered_by_the_app_not_raised_to_the_server(
     body = problem(answer, 500)
     assert body["type"] == "urn:synth:problem:internal"
     assert "internal detail" not in answer.text
+
+
+def test_a_replay_of_an_error_block_too_thin_to_sample_fails_its_job_with_422(
+    client: TestClient,
+) -> None:
+    # box.x = box.y exactly: the loader's LP finds it feasible, the replay's rejection sampler
+    # cannot hit a line in a rectangle (synth.errors.parameters.SAMPLE_BUDGET); it used to draw
+    # for ever, holding the worker until the time budget killed it.
+    spec = SEED.read_text(encoding="utf-8").replace(
+        "      rz: 5 deg\n",
+        "      rz: 5 deg\n      constraints:\n"
+        "        - {terms: {x: 1, y: -1}, min: 0 cm, max: 0 cm}\n",
+        1,
+    )
+    answer = client.post("/v1/replays", json={"program": "BEGIN END", "spec": spec, "trials": 1})
+    body = failed(client, answer, 422)
+    assert body["title"] == "Invalid task specification"
+    assert body["path"] == "uncertainty of box"
+    assert str(body["detail"]).startswith("uncertainty of box: 0 of 100032 draws")
