@@ -13,7 +13,6 @@ import itertools
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.stats import truncnorm
 
 from synth.exceptions import SpecError
 from synth.models.spec import PARAMS, Uncertainty
@@ -196,6 +195,8 @@ class ParameterSpace:
             parts = []
             for b in self.blocks:
                 if b.distribution == "normal":
+                    from scipy.stats import truncnorm  # slow to import; most tasks are uniform
+
                     sigma = np.maximum(np.maximum(np.abs(b.lo), np.abs(b.hi)) / 3.0, 1e-300)
                     parts.append(
                         truncnorm.rvs(
