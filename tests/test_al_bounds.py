@@ -8,6 +8,7 @@ import time
 from pathlib import Path
 
 import pytest
+from _paths import SEED_TASK
 
 from synth.al import ast
 from synth.al.interpreter import MAX_TIME, MAX_WALL_TIME, Interpreter
@@ -16,9 +17,6 @@ from synth.al.parser import parse_program
 from synth.exceptions import ALRuntimeError, ALSyntaxError
 from synth.replay.machine import ReplayOptions
 from synth.replay.run import replay_program
-
-ROOT = Path(__file__).resolve().parent.parent
-SEED = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
 
 # The seed's grasp approach (tests/data/al/seed_4_8_search.al, line 26) and a point above it.
 GRASP = "PIN1*TRANS(ROTN(VECTOR(.924,.383,.001),180.*DEG),VECTOR(0,0,{}))"
@@ -107,7 +105,7 @@ def test_wall_clock_budget_stops_a_loop_that_takes_no_simulated_time() -> None:
 
 def test_replay_of_a_move_loop_ends_at_the_simulated_budget_naming_the_line() -> None:
     report = replay_program(
-        MOVE_LOOP, SEED, options=ReplayOptions(max_time=20.0), filename="loop.al"
+        MOVE_LOOP, SEED_TASK, options=ReplayOptions(max_time=20.0), filename="loop.al"
     )
     nominal = report.nominal
     assert nominal.outcome == "error" and nominal.line in (3, 4, 5)  # the loop body's lines
@@ -138,7 +136,7 @@ def test_cli_exits_2_on_deep_nesting_and_huge_literals(
 ) -> None:
     program = tmp_path / "deep.al"
     program.write_text(text, encoding="utf-8")
-    done = _cli("replay", str(program), "--task", str(SEED), "--trials", "0")
+    done = _cli("replay", str(program), "--task", str(SEED_TASK), "--trials", "0")
     assert done.returncode == 2, done.stderr
     assert message in done.stderr and "Traceback" not in done.stderr
 
@@ -146,7 +144,7 @@ def test_cli_exits_2_on_deep_nesting_and_huge_literals(
 def test_a_byte_that_is_not_utf8_is_reported_at_line_and_column(tmp_path: Path) -> None:
     program = tmp_path / "bad.al"
     program.write_bytes("SCALAR S;\nS ← 1 ".encode() + b"\xff;\n")
-    done = _cli("replay", str(program), "--task", str(SEED), "--trials", "0")
+    done = _cli("replay", str(program), "--task", str(SEED_TASK), "--trials", "0")
     assert done.returncode == 2
     assert f"{program}:2:7: byte 0xff is not UTF-8" in done.stderr
     assert "position" not in done.stderr  # the codec's byte offset

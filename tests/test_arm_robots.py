@@ -15,6 +15,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 import trimesh
+from _paths import SEED_TASK, TASKS
 from pydantic import ValidationError
 
 from synth.cli import main
@@ -44,7 +45,6 @@ from synth.replay.run import replay_context
 from synth.strategies.context import plan_context
 
 ROBOTS = example_robot_data_dir()
-TASKS = Path(__file__).resolve().parent.parent / "fixtures" / "tasks"
 
 
 @pytest.fixture(autouse=True)
@@ -243,7 +243,7 @@ def _manipulator(model: str, base_cm: tuple[float, float], park_z_cm: float) -> 
 
 
 def test_park_configuration_is_collision_free_or_named():
-    graph_spec = load_task(TASKS / "seed_4_8.yaml")
+    graph_spec = load_task(SEED_TASK)
     graph = believed_graph(graph_spec)
     manip = _manipulator("ur5", (35, 80), 10.7)
     arm = manipulator_arm(manip)

@@ -8,7 +8,7 @@ import subprocess
 import sys
 
 import pytest
-from _paths import GOLDEN, SEED_TASK
+from _paths import SEED_PROGRAM, SEED_TASK
 
 LOADS_NOTHING_ABOVE = [
     # AL knows no task: the binding of a task's world to AL names lives in codegen.
@@ -44,7 +44,7 @@ def test_synth_replay_loads_no_planner_and_of_the_estimator_only_the_sampler() -
     # with synth.errors.parameters (synth/replay/truth.py), and nothing else of synth.errors;
     # scipy.stats (~0.25 s) only for a normal distribution, which the seed task does not use.
     watched = ("synth.errors", "synth.strategies", "synth.pipeline", "scipy.stats")
-    argv = ["replay", str(GOLDEN / "seed_4_8.al"), "--task", str(SEED_TASK), "--trials", "0"]
+    argv = ["replay", str(SEED_PROGRAM), "--task", str(SEED_TASK), "--trials", "0"]
     code = (
         "import contextlib, io, json, sys\n"
         "from synth.cli import main\n"

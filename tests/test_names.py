@@ -16,6 +16,7 @@ from typing import Any
 
 import pytest
 import yaml
+from _paths import ROOT, SEED_TASK
 
 from synth.al import interpreter as interpreter_module
 from synth.al.names import (
@@ -33,8 +34,6 @@ from synth.al.values import CONSTANTS as VALUE_CONSTANTS
 from synth.exceptions import SpecError
 from synth.models.loader import validate_task
 
-ROOT = Path(__file__).resolve().parents[1]
-SEED = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
 SYNTH = [sys.executable, "-m", "synth.cli"]
 
 DOCUMENTED_PREDECLARED = (
@@ -70,7 +69,7 @@ CONTROL = [
 
 
 def seed() -> dict[str, Any]:
-    data: dict[str, Any] = yaml.safe_load(SEED.read_text(encoding="utf-8"))
+    data: dict[str, Any] = yaml.safe_load(SEED_TASK.read_text(encoding="utf-8"))
     return data
 
 

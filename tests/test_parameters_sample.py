@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from _paths import GOLDEN, SEED_TASK
+from _paths import SEED_PROGRAM, SEED_TASK
 
 from synth.cli import main
 from synth.errors.parameters import (
@@ -108,7 +108,7 @@ def test_synth_replay_of_a_block_too_thin_to_sample_exits_2_with_one_line(
     # The nominal run draws nothing; the first trial draws the box's error and is refused.
     task = tmp_path / "equality.yaml"
     task.write_text(_equality_text(), encoding="utf-8")
-    argv = ["replay", str(GOLDEN / "seed_4_8.al"), "--task", str(task), "--trials", "1"]
+    argv = ["replay", str(SEED_PROGRAM), "--task", str(task), "--trials", "1"]
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert err.startswith("synth replay: error: uncertainty of box: 0 of 100032 draws")

@@ -18,13 +18,14 @@ from pathlib import Path
 
 import pytest
 import yaml
-from _server_support import SEED, YAML, client_for, done, failed, overridden
+from _paths import SEED_TASK
+from _server_support import YAML, client_for, done, failed, overridden
 from fastapi.testclient import TestClient
 
 from server.db import NewPlan
 from server.settings import Settings
 
-SEED_TEXT = SEED.read_text()
+SEED_TEXT = SEED_TASK.read_text()
 
 
 @pytest.fixture(scope="module")
@@ -463,7 +464,7 @@ def test_plan_document_is_synth_plan_json_plus_the_servers_keys(
     from synth.cli import main
 
     # validate=false proves by the nominal replay alone, as --proof-trials 0 does.
-    assert main(["plan", str(SEED), "--json", "--proof-trials", "0"]) == 0
+    assert main(["plan", str(SEED_TASK), "--json", "--proof-trials", "0"]) == 0
     cli = json.loads(capsys.readouterr().out)
     served = done(client, client.post("/v1/plans?validate=false", content=SEED_TEXT, headers=YAML))
     assert served["proof"]["passed"] and served["proof"]["decided_by"] == "nominal-only"

@@ -9,17 +9,14 @@ from pathlib import Path
 
 import pytest
 import yaml
+from _paths import DATA, SEED_TASK, TASKS
 
 from server.service import YAML_LIMITS, parse_spec
 from synth.exceptions import SpecError
 from synth.models.loader import load_task, parse_task
 from synth.models.yamlread import DEFAULT_LIMITS, WITH_LIBYAML, YamlLimits, read_yaml
 
-ROOT = Path(__file__).resolve().parent.parent
-SEED = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
-TASK_FILES = sorted((ROOT / "fixtures" / "tasks").rglob("*.yaml")) + sorted(
-    (ROOT / "tests" / "data").glob("*.yaml")
-)
+TASK_FILES = sorted(TASKS.rglob("*.yaml")) + sorted(DATA.glob("*.yaml"))
 
 
 def billion_laughs(levels: int = 9) -> str:
@@ -105,7 +102,7 @@ def test_the_service_parses_with_the_same_loader() -> None:
         parse_spec(HUGE_LIST.encode())
     with pytest.raises(SpecError, match="aliases"):
         parse_spec(billion_laughs().encode())
-    assert parse_spec(SEED.read_bytes()).name == load_task(SEED).name
+    assert parse_spec(SEED_TASK.read_bytes()).name == load_task(SEED_TASK).name
 
 
 def test_mapping_entries_are_bounded_too() -> None:
