@@ -14,6 +14,7 @@ from synth.al import ast
 from synth.al.interpreter import MAX_TIME, MAX_WALL_TIME, Interpreter
 from synth.al.machine import IdealMachine
 from synth.al.parser import parse_program
+from synth.al.values import Scalar
 from synth.exceptions import ALRuntimeError, ALSyntaxError
 from synth.replay.machine import ReplayOptions
 from synth.replay.run import replay_program
@@ -52,8 +53,15 @@ def test_nesting_at_the_limit_parses_and_runs(kind: str) -> None:
     # The statement adds one level (two for the BEGIN's body), the literal one more.
     program = parse_program(nested(kind, ast.MAX_NESTING - 3), filename="deep.al")
     assert ast.too_deep(program) is None
-    result = Interpreter(IdealMachine()).run(program)  # no RecursionError
+    interpreter = Interpreter(IdealMachine())
+    result = interpreter.run(program)  # no RecursionError
     assert result.completed
+    # And the deep line computed what it says: 97 NOTs of TRUE are FALSE (odd count);
+    # ABS(ABS(…1…)) is 1; the IF chain and the nested blocks reach S ← 1.
+    if kind == "NOT":
+        assert ast.MAX_NESTING - 3 == 97 and interpreter.value("B") is False
+    else:
+        assert interpreter.value("S") == Scalar(1.0)
 
 
 def test_the_interpreter_refuses_a_deep_tree_built_by_code() -> None:

@@ -59,7 +59,13 @@ def test_replay_reads_the_program_from_stdin(
 ) -> None:
     monkeypatch.setattr(sys, "stdin", io.StringIO(SEED_PROGRAM.read_text(encoding="utf-8")))
     assert main(["replay", "-", "--task", str(SEED_TASK), "--trials", "0"]) == 0
-    assert "success" in capsys.readouterr().out
+    from_stdin = capsys.readouterr().out
+    # The same report as the file's, but for the program's name.
+    assert main(["replay", str(SEED_PROGRAM), "--task", str(SEED_TASK), "--trials", "0"]) == 0
+    from_file = capsys.readouterr().out
+    assert from_stdin.splitlines()[0] == "replay <stdin> on task seed_4_8"
+    assert from_stdin == from_file.replace(str(SEED_PROGRAM), "<stdin>", 1)
+    assert "nominal: success: PIN1 seated in BH1" in from_stdin
 
 
 def test_replay_from_stdin_names_stdin_in_errors(

@@ -476,10 +476,18 @@ def test_golden_programs_replay_successfully_in_the_nominal_world(task: str) -> 
 
 
 def test_stand_alone_file_runs_without_a_binding() -> None:
+    # The preamble declares and places the world itself: seated at the first point, the pin
+    # ends where the task's graph puts BH1, turned φ = 90° and D_F = 1.71 cm deep (the pose
+    # test_search_program_searches_and_seats_at_the_third_point computes, at offset 0).
     machine = ContactMachine(lambda n: SEATED)
     interpreter = Interpreter(machine, hand_names=HAND_NAMES)
     result = interpreter.run(parse_program(emitted("seed_4_8", preamble=True)))
     assert result.completed
+    distance = interpreter.value("DISTANCE_OFF")
+    assert isinstance(distance, V.Scalar) and abs(distance.value) < 1e-9
+    turn = pin.SE3(pin.exp3(np.array([0, 0, math.pi / 2])), np.array([0, 0, -D_F * CM]))
+    seated = graph_of("seed_4_8").world_from("bh1") * turn
+    assert np.allclose(interpreter.frame("PIN1").homogeneous, seated.homogeneous, atol=2e-6)
 
 
 # --------------------------------------------------------------------------------------------

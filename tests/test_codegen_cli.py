@@ -41,7 +41,10 @@ def test_plan_without_preamble_json_program_is_the_bare_program(
 ) -> None:
     assert main(["plan", str(SEED_TASK), "--proof-trials", "0", "--json"]) == 0
     program = json.loads(capsys.readouterr().out)["program"]
+    # The golden file is this very program (scripts/regen_golden.py: the nominal proof's
+    # program, without a preamble), so the JSON carries it byte for byte.
     assert program.startswith("{ PIN-IN-HOLE STRATEGY")
+    assert program == (GOLDEN / "seed_4_8.al").read_text(encoding="utf-8")
 
 
 def test_plan_output_that_cannot_be_written_is_a_clean_error(

@@ -126,13 +126,29 @@ def test_every_dimensioned_number_carries_a_unit() -> None:
         assert numbers > 30
 
 
-def test_the_unit_check_catches_bare_numbers() -> None:
-    for text in ("X ← 3.54;", "MOVE PIN1 TO BH1*TRANS(NILROTN,VECTOR(0,0,3))", "Y ← -2*R*CM;"):
-        program = parse_program(text)
-        problems = [
-            unit_problem(n, p) for n, p in with_parents(program) if isinstance(n, ast.Number)
-        ]
-        assert any(problems), text
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        # Bare: the number itself, each component of an unscaled VECTOR, and a number whose
+        # parent multiplies it by a variable (the unit further up does not count).
+        ("X ← 3.54;", ["bare number 3.54 in Assign"]),
+        (
+            "MOVE PIN1 TO BH1*TRANS(NILROTN,VECTOR(0,0,3))",
+            ["bare number 0.0 in Call", "bare number 0.0 in Call", "bare number 3.0 in Call"],
+        ),
+        ("Y ← -2*R*CM;", ["bare number 2.0 in BinOp"]),
+        # Carrying a unit: by its parent, through its VECTOR, or as a rotation's axis.
+        ("Y ← -2*CM;", [None]),
+        ("V ← VECTOR(1,2,3)*CM;", [None, None, None]),
+        ("R ← ROT(VECTOR(0,0,1), 90*DEG);", [None, None, None, None]),
+    ],
+)
+def test_the_unit_check_catches_bare_numbers_and_only_them(
+    text: str, expected: list[str | None]
+) -> None:
+    program = parse_program(text)
+    problems = [unit_problem(n, p) for n, p in with_parents(program) if isinstance(n, ast.Number)]
+    assert problems == expected
 
 
 # --------------------------------------------------------------------------------------------
