@@ -50,7 +50,9 @@ def test_a_pin_wider_than_its_hole_is_refused_at_load_naming_the_fit() -> None:
 
 def test_an_equal_diameter_does_not_fit_and_a_thinner_pin_does() -> None:
     # zero clearance: c = 0, no tilt at all is admissible, so the pin cannot go in
-    assert fit_problem("P", 0.0064, "H", 0.0064) is not None
+    assert fit_problem("P", 0.0064, "H", 0.0064) == (
+        "pin P (0.64 cm) does not fit hole H (0.64 cm): a pin must be thinner than its hole"
+    )
     assert fit_problem("P", 0.00635, "H", 0.0064) is None
     text = _seed_text().replace("diameter: 0.635 cm", "diameter: 0.64 cm")
     with pytest.raises(SpecError, match=r"pin PIN1 \(0.64 cm\) does not fit hole BH1"):
@@ -86,7 +88,8 @@ def test_replay_onset_solves_the_exact_two_point_balance() -> None:
     # the two models agree to first order: the exact onset is c/μ + 5.6 % (the θ² terms the
     # small-angle limit drops), and the planner's c/μ is the lower, i.e. conservative, one
     planner = wedging_tilt(D, d, MU)
-    assert planner < onset < 1.1 * planner
+    assert planner < onset  # conservative
+    assert onset / planner == pytest.approx(0.027512 / math.radians(1.4921), abs=1e-4)  # 1.0564
     # wedging needs the two-point contact before the seat: h(2°) = 0.12 cm
     assert wedges(math.radians(2.0), D, d, MU, seat=0.0171)
     assert not wedges(math.radians(2.0), D, d, MU, seat=0.001)

@@ -180,8 +180,15 @@ def test_control_characters_are_refused_anywhere_in_a_name(field: str, char: str
 def test_a_name_must_match_in_full_and_be_ascii(value: str) -> None:
     # re.match(r"^…$") accepted "BH1\n" ($ matches before a final newline); Unicode letters and
     # digits (Greek capital beta, superscript two, full-width letters) are not AL identifiers.
-    assert al_name_problem(value) is not None
-    assert al_name_problem(value, role="arm") is not None
+    # Refused as such, for every role, before the keyword or unit tables are consulted
+    # ("END\n" would otherwise be "an AL keyword", whatever the full match said).
+    why = (
+        f"{value!r} is not an AL identifier: an ASCII letter followed by letters, digits and "
+        "'_', with no space or control character"
+    )
+    assert al_name_problem(value) == why
+    assert al_name_problem(value, role="arm") == why
+    assert al_name_problem(value, role="park") == why
 
 
 def test_a_frame_name_may_not_be_another_frame_al_name() -> None:

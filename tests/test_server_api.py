@@ -258,18 +258,29 @@ def test_wrong_method_is_405(client: TestClient) -> None:
 
 
 @pytest.mark.parametrize(
-    "body",
+    ("body", "loc", "why"),
     [
-        {},
-        {"program": "BEGIN END"},
-        {"spec": {"name": "t"}, "plan_id": "0" * 32, "program": "x"},
-        {"plan_id": "0" * 32, "seed": -1},
-        {"plan_id": "0" * 32, "extra": 1},
+        # ReplayIn (server/schemas.py): a program needs its spec, a spec excludes a plan_id,
+        # the seed is ge=0, and unknown keys are refused.
+        ({}, ["body"], "give 'program' and 'spec', or 'plan_id'"),
+        ({"program": "BEGIN END"}, ["body"], "give 'program' and 'spec', or 'plan_id'"),
+        (
+            {"spec": {"name": "t"}, "plan_id": "0" * 32, "program": "x"},
+            ["body"],
+            "give either 'spec' or 'plan_id', not both",
+        ),
+        ({"plan_id": "0" * 32, "seed": -1}, ["body", "seed"], "greater than or equal to 0"),
+        ({"plan_id": "0" * 32, "extra": 1}, ["body", "extra"], "Extra inputs are not permitted"),
     ],
+    ids=["empty", "program-alone", "spec-and-plan", "negative-seed", "unknown-key"],
 )
-def test_malformed_replay_requests_are_422(client: TestClient, body: dict[str, object]) -> None:
+def test_malformed_replay_requests_are_422(
+    client: TestClient, body: dict[str, object], loc: list[str], why: str
+) -> None:
     answer = problem(client.post("/v1/replays", json=body), 422)
-    assert answer["errors"]
+    errors = answer["errors"]
+    assert isinstance(errors, list) and len(errors) == 1, errors  # one fault per body
+    assert errors[0]["loc"] == loc and why in errors[0]["msg"], errors
 
 
 # -- listing --------------------------------------------------------------------------------------
