@@ -9,18 +9,21 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from synth.errors.bounds import Interval
-from synth.errors.contacts import ContactProblem
-from synth.errors.estimate import ErrorReport
-from synth.errors.locate import LocationResult
-from synth.models.graph import AttributeGraph
 from synth.models.spec import WORLD
-from synth.strategies.records import Destination, PinInHoleStrategy, PlanResult
 
 if TYPE_CHECKING:
+    # Annotations only: ``synth replay`` imports this module for its summary, and the
+    # referee's start-up must not pay for the estimator's and the planner's modules
+    # (tests/test_layers.py checks that importing it loads neither).
+    from synth.errors.bounds import Interval
+    from synth.errors.contacts import ContactProblem
+    from synth.errors.estimate import ErrorReport
+    from synth.errors.locate import LocationResult
+    from synth.models.graph import AttributeGraph
     from synth.replay.proof import Proof
     from synth.replay.report import ReplayReport
     from synth.replay.run import TrialRecord
+    from synth.strategies.records import Destination, PinInHoleStrategy, PlanResult
     from synth.strategies.sequence import SequencePlan
 
 _ROWS = (

@@ -5,7 +5,6 @@ from __future__ import annotations
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
-from pathlib import Path
 from typing import Any
 
 import httpx
@@ -15,8 +14,6 @@ from fastapi.testclient import TestClient
 from server.main import create_app
 from server.settings import Settings, get_settings
 
-ROOT = Path(__file__).resolve().parents[1]
-SEED = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
 YAML = {"Content-Type": "application/yaml"}
 FINAL = frozenset({"done", "failed", "lost", "cancelled"})
 

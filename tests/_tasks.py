@@ -4,12 +4,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from _paths import TASKS
+
 from synth.models.loader import load_task
 from synth.models.spec import Pose, TaskSpec
 from synth.pipeline import Synthesis, SynthesisOptions, synthesize
 from synth.replay.proof import ProofOptions
-
-FIXTURES = Path(__file__).resolve().parent.parent / "fixtures" / "tasks"
 
 
 def with_base(spec: TaskSpec, x_cm: float, y_cm: float, yaw_deg: float) -> TaskSpec:
@@ -26,7 +26,7 @@ def with_base(spec: TaskSpec, x_cm: float, y_cm: float, yaw_deg: float) -> TaskS
 def plannable() -> list[Path]:
     """The fixture tasks ``synth plan`` accepts: with an insertion and a manipulator."""
     out = []
-    for path in sorted(FIXTURES.glob("*.yaml")):
+    for path in sorted(TASKS.glob("*.yaml")):
         spec = load_task(path)
         if spec.insertion is not None and spec.manipulator is not None:
             out.append(path)
@@ -40,5 +40,5 @@ def synthesized(task: Path | TaskSpec, trials: int = 0, seed: int = 0) -> Synthe
     that asserts ``attempts == 1`` says the planner's first choice was the proven one.
     """
     options = SynthesisOptions(proof=ProofOptions(trials=trials, seed=seed, workers=1))
-    base_dir = FIXTURES if isinstance(task, TaskSpec) else None
+    base_dir = TASKS if isinstance(task, TaskSpec) else None
     return synthesize(task, options, base_dir=base_dir)

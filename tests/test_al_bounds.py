@@ -8,17 +8,16 @@ import time
 from pathlib import Path
 
 import pytest
+from _paths import SEED_TASK
 
 from synth.al import ast
 from synth.al.interpreter import MAX_TIME, MAX_WALL_TIME, Interpreter
 from synth.al.machine import IdealMachine
 from synth.al.parser import parse_program
+from synth.al.values import Scalar
 from synth.exceptions import ALRuntimeError, ALSyntaxError
 from synth.replay.machine import ReplayOptions
 from synth.replay.run import replay_program
-
-ROOT = Path(__file__).resolve().parent.parent
-SEED = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
 
 # The seed's grasp approach (tests/data/al/seed_4_8_search.al, line 26) and a point above it.
 GRASP = "PIN1*TRANS(ROTN(VECTOR(.924,.383,.001),180.*DEG),VECTOR(0,0,{}))"
@@ -54,8 +53,15 @@ def test_nesting_at_the_limit_parses_and_runs(kind: str) -> None:
     # The statement adds one level (two for the BEGIN's body), the literal one more.
     program = parse_program(nested(kind, ast.MAX_NESTING - 3), filename="deep.al")
     assert ast.too_deep(program) is None
-    result = Interpreter(IdealMachine()).run(program)  # no RecursionError
+    interpreter = Interpreter(IdealMachine())
+    result = interpreter.run(program)  # no RecursionError
     assert result.completed
+    # And the deep line computed what it says: 97 NOTs of TRUE are FALSE (odd count);
+    # ABS(ABS(…1…)) is 1; the IF chain and the nested blocks reach S ← 1.
+    if kind == "NOT":
+        assert ast.MAX_NESTING - 3 == 97 and interpreter.value("B") is False
+    else:
+        assert interpreter.value("S") == Scalar(1.0)
 
 
 def test_the_interpreter_refuses_a_deep_tree_built_by_code() -> None:
@@ -107,7 +113,7 @@ def test_wall_clock_budget_stops_a_loop_that_takes_no_simulated_time() -> None:
 
 def test_replay_of_a_move_loop_ends_at_the_simulated_budget_naming_the_line() -> None:
     report = replay_program(
-        MOVE_LOOP, SEED, options=ReplayOptions(max_time=20.0), filename="loop.al"
+        MOVE_LOOP, SEED_TASK, options=ReplayOptions(max_time=20.0), filename="loop.al"
     )
     nominal = report.nominal
     assert nominal.outcome == "error" and nominal.line in (3, 4, 5)  # the loop body's lines
@@ -138,7 +144,7 @@ def test_cli_exits_2_on_deep_nesting_and_huge_literals(
 ) -> None:
     program = tmp_path / "deep.al"
     program.write_text(text, encoding="utf-8")
-    done = _cli("replay", str(program), "--task", str(SEED), "--trials", "0")
+    done = _cli("replay", str(program), "--task", str(SEED_TASK), "--trials", "0")
     assert done.returncode == 2, done.stderr
     assert message in done.stderr and "Traceback" not in done.stderr
 
@@ -146,7 +152,7 @@ def test_cli_exits_2_on_deep_nesting_and_huge_literals(
 def test_a_byte_that_is_not_utf8_is_reported_at_line_and_column(tmp_path: Path) -> None:
     program = tmp_path / "bad.al"
     program.write_bytes("SCALAR S;\nS ← 1 ".encode() + b"\xff;\n")
-    done = _cli("replay", str(program), "--task", str(SEED), "--trials", "0")
+    done = _cli("replay", str(program), "--task", str(SEED_TASK), "--trials", "0")
     assert done.returncode == 2
     assert f"{program}:2:7: byte 0xff is not UTF-8" in done.stderr
     assert "position" not in done.stderr  # the codec's byte offset

@@ -10,11 +10,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
+from _paths import DATA_AL, SEED_SEARCH, SEED_TAP_TASK, SEED_TASK, TASKS
 
 from synth.al import ast
 from synth.al import values as V
@@ -36,8 +36,6 @@ from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
 from synth.units import CM, INCH
 
-ROOT = Path(__file__).parent.parent
-DATA = Path(__file__).parent / "data" / "al"
 OZ_N = 4.4482216152605 / 16  # 1 oz-force = 1/16 lbf [N]
 
 
@@ -751,7 +749,7 @@ def test_cobegin_signal_wait() -> None:
 
 @pytest.fixture(scope="module")
 def seed_graph() -> AttributeGraph:
-    return AttributeGraph(load_task(ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"))
+    return AttributeGraph(load_task(SEED_TASK))
 
 
 T_WP = H(Rz(90), (24.1, 117, 0.537))  # pin in the rack, design.md / S:2577
@@ -793,7 +791,7 @@ def test_preamble_parses_and_binds_the_same_world(seed_graph: AttributeGraph) ->
 
 
 def test_binding_rigid_and_independent_kinds() -> None:
-    graph = AttributeGraph(load_task(ROOT / "fixtures" / "tasks" / "screw_on_driver.yaml"))
+    graph = AttributeGraph(load_task(TASKS / "screw_on_driver.yaml"))
     binding = bind_world(graph)
     kinds = {a.child: a.rigid for a in binding.affixments}
     assert kinds == {"BTOP": False, "BH1": False, "DRIVER": True, "SCREW": False, "TIP": True}
@@ -810,7 +808,6 @@ def test_binding_rigid_and_independent_kinds() -> None:
 # --------------------------------------------------------------------------------------------
 # The seed's generated search program (L2715–2781) on seed_4_8
 
-SEARCH = DATA / "seed_4_8_search.al"
 PIN_DIAMETER = 0.635 * CM
 APPROACH, DEPTH, AIM = 2.54, 1.71, 4.25  # cm above the hole / seated depth / aim below
 SURFACE = APPROACH / (APPROACH + AIM)  # fraction of the last segment where the tip touches
@@ -818,7 +815,7 @@ SEATED = (APPROACH + DEPTH) / (APPROACH + AIM)
 
 
 def search_program() -> ast.Program:
-    return parse_program(SEARCH.read_text(encoding="utf-8"), filename=str(SEARCH))
+    return parse_program(SEED_SEARCH.read_text(encoding="utf-8"), filename=str(SEED_SEARCH))
 
 
 def search_points() -> list[tuple[float, float]]:
@@ -837,7 +834,7 @@ def search_points() -> list[tuple[float, float]]:
 
 
 def line_of(text: str) -> int:
-    lines = SEARCH.read_text(encoding="utf-8").splitlines()
+    lines = SEED_SEARCH.read_text(encoding="utf-8").splitlines()
     return next(i for i, line in enumerate(lines, 1) if text in line)
 
 
@@ -934,7 +931,7 @@ def test_search_program_gives_up_after_the_whole_pattern(seed_graph: AttributeGr
 def test_tap_program_corrects_for_a_box_higher_than_believed() -> None:
     # seed_4_8_tap (L2804–2844): the box is truly 0.5 in higher than believed. The tap stops
     # 1.27 cm early, CORR measures it, and the insertion test subtracts it.
-    graph = AttributeGraph(load_task(ROOT / "fixtures" / "tasks" / "seed_4_8_tap.yaml"))
+    graph = AttributeGraph(load_task(SEED_TAP_TASK))
     high = 0.5 * 2.54
     tap = (5.08 - high) / (2 * 5.08)  # the tap runs from 5.08 cm above to 5.08 cm below
     seat = (APPROACH + DEPTH - high) / (APPROACH + AIM)
@@ -946,7 +943,7 @@ def test_tap_program_corrects_for_a_box_higher_than_believed() -> None:
 
     m = ScriptedMachine(script, hand=T_PARK, grasp_width=PIN_DIAMETER)
     it = bind_world(graph).interpreter(m)
-    path = DATA / "seed_4_8_tap.al"
+    path = DATA_AL / "seed_4_8_tap.al"
     result = it.run(parse_program(path.read_text(encoding="utf-8"), filename=str(path)))
     assert result.completed
     assert sv(it.value("CORR")) == (pytest.approx(high * CM), V.LENGTH)
@@ -967,7 +964,7 @@ def test_refined_hand_written_program() -> None:
     it = Interpreter(m)
     it.define_frame("INITIAL_BOX_POSITION", pin.SE3(np.eye(3), np.array([0.40, 0.60, 0.0])))
     it.define_frame("BPARK", pin.SE3(T_PARK[:3, :3], T_PARK[:3, 3]))
-    path = DATA / "seed_2_3_8_refined.al"
+    path = DATA_AL / "seed_2_3_8_refined.al"
     result = it.run(parse_program(path.read_text(encoding="utf-8"), filename=str(path)))
     assert result.completed
     assert [c.kind for c in m.commands] == ["open", "move", "center", "move", "open", "move"]

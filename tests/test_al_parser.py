@@ -10,6 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from _paths import DATA_AL
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -19,8 +20,7 @@ from synth.al.parser import grammar_keywords, parse_program
 from synth.al.printer import format_expression, format_program, format_statement
 from synth.exceptions import ALSyntaxError, SynthError
 
-DATA = Path(__file__).parent / "data" / "al"
-SEED_PROGRAMS = sorted(DATA.glob("*.al"))
+SEED_PROGRAMS = sorted(DATA_AL.glob("*.al"))
 
 
 def parse(text: str) -> ast.Program:
@@ -52,7 +52,7 @@ def num(value: float) -> ast.Number:
 
 
 def load(name: str) -> ast.Program:
-    path = DATA / name
+    path = DATA_AL / name
     return parse_program(path.read_text(encoding="utf-8"), filename=str(path))
 
 

@@ -4,11 +4,11 @@ trips, the parameter file's sources, and the base placement for the seed's workc
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
+from _paths import SEED_TASK
 
 from synth.models.arm import (
     build_stanford_arm,
@@ -258,7 +258,7 @@ def test_default_base_reaches_seed_workcell_with_hand_down():
 
 
 def test_seed_task_fixture_names_the_stanford_arm():
-    task = load_task(Path(__file__).resolve().parent.parent / "fixtures/tasks/seed_4_8.yaml")
+    task = load_task(SEED_TASK)
     assert task.manipulator is not None
     arm = load_arm(task.manipulator.arm, task.manipulator.hand)
     park = pin.SE3(pin.utils.rotate("y", np.pi), np.array([43.5, 56.9, 10.7]) * CM)

@@ -35,12 +35,12 @@ from __future__ import annotations
 
 import itertools
 import math
-from pathlib import Path
 
 import coal
 import numpy as np
 import pinocchio as pin
 import pytest
+from _paths import SEED_TASK
 
 from synth.models import meshes
 from synth.models.arm.collision import coal_geometry, convex_hull
@@ -50,7 +50,6 @@ from synth.models.workcell import HoleSite, PinModel, WorkcellModel
 from synth.replay.capture import TipPlacement, captures, entry_contact
 from synth.replay.truth import nominal_world
 
-ROOT = Path(__file__).parent.parent
 CM = 0.01
 MU = 0.3
 HEIGHT = 1.5 * CM  # the tip centre's start above the mouth: clear of everything
@@ -59,7 +58,7 @@ BOX = (3 * CM, 3 * CM, 2.5 * CM)
 
 @pytest.fixture(scope="module")
 def parts() -> tuple[HoleSite, PinModel]:
-    graph = AttributeGraph(load_task(ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"))
+    graph = AttributeGraph(load_task(SEED_TASK))
     cell = WorkcellModel(graph, [np.array([0.2, 0.7, 0.0])]).place(nominal_world(graph))
     return cell.hole("bh1"), cell.pins["pin1"]
 

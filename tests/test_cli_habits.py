@@ -12,15 +12,13 @@ from importlib.metadata import version
 from pathlib import Path
 
 import pytest
+from _paths import SEED_PROGRAM, SEED_TASK
 
 from synth.al.parser import parse_program
 from synth.cli import EXIT_INTERNAL, EXIT_REPLAY_FAILED, EXIT_USAGE, main
 from synth.progress import ProgressBar
 from synth.report import strip_seed_references
 
-ROOT = Path(__file__).resolve().parents[1]
-TASK = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
-GOLDEN = ROOT / "fixtures" / "golden" / "seed_4_8.al"
 SYNTH = [sys.executable, "-m", "synth.cli"]
 SEED_REF = re.compile(r"seed L\d|\bL\d{4}\b|seed Eqn")
 
@@ -43,7 +41,7 @@ def test_help_lists_the_exit_codes(capsys: pytest.CaptureFixture[str]) -> None:
 
 def test_plan_to_stdout_writes_only_the_program(tmp_path: Path) -> None:
     done = subprocess.run(
-        [*SYNTH, "plan", str(TASK), "--proof-trials", "0", "-o", "-"],
+        [*SYNTH, "plan", str(SEED_TASK), "--proof-trials", "0", "-o", "-"],
         capture_output=True,
         text=True,
         cwd=tmp_path,
@@ -52,23 +50,29 @@ def test_plan_to_stdout_writes_only_the_program(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stderr
     assert not (tmp_path / "-").exists()
     parse_program(done.stdout)
-    assert done.stdout == GOLDEN.read_text(encoding="utf-8")
+    assert done.stdout == SEED_PROGRAM.read_text(encoding="utf-8")
     assert "Decisions:" in done.stderr and "Decisions:" not in done.stdout
 
 
 def test_replay_reads_the_program_from_stdin(
     monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    monkeypatch.setattr(sys, "stdin", io.StringIO(GOLDEN.read_text(encoding="utf-8")))
-    assert main(["replay", "-", "--task", str(TASK), "--trials", "0"]) == 0
-    assert "success" in capsys.readouterr().out
+    monkeypatch.setattr(sys, "stdin", io.StringIO(SEED_PROGRAM.read_text(encoding="utf-8")))
+    assert main(["replay", "-", "--task", str(SEED_TASK), "--trials", "0"]) == 0
+    from_stdin = capsys.readouterr().out
+    # The same report as the file's, but for the program's name.
+    assert main(["replay", str(SEED_PROGRAM), "--task", str(SEED_TASK), "--trials", "0"]) == 0
+    from_file = capsys.readouterr().out
+    assert from_stdin.splitlines()[0] == "replay <stdin> on task seed_4_8"
+    assert from_stdin == from_file.replace(str(SEED_PROGRAM), "<stdin>", 1)
+    assert "nominal: success: PIN1 seated in BH1" in from_stdin
 
 
 def test_replay_from_stdin_names_stdin_in_errors(
     monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
     monkeypatch.setattr(sys, "stdin", io.StringIO("MOVE BMANIP TO ;\n"))
-    assert main(["replay", "-", "--task", str(TASK), "--trials", "0"]) == EXIT_USAGE
+    assert main(["replay", "-", "--task", str(SEED_TASK), "--trials", "0"]) == EXIT_USAGE
     assert "<stdin>" in capsys.readouterr().err
 
 
@@ -91,7 +95,7 @@ def test_progress_shows_rate_and_eta() -> None:
 def test_plan_text_leads_with_decisions_and_hides_records_and_seed_lines(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    assert main(["plan", str(TASK), "--proof-trials", "0"]) == 0
+    assert main(["plan", str(SEED_TASK), "--proof-trials", "0"]) == 0
     plain = capsys.readouterr().out
     head = plain.splitlines()
     assert head[0].startswith("Plan: ") and head[2] == "Decisions:"
@@ -100,7 +104,7 @@ def test_plan_text_leads_with_decisions_and_hides_records_and_seed_lines(
     assert not SEED_REF.search(plain)
     assert plain.count("grasp orientation") == 1 and plain.count("the hole's axis as it") == 1
 
-    assert main(["plan", str(TASK), "--proof-trials", "0", "--records", "--verbose"]) == 0
+    assert main(["plan", str(SEED_TASK), "--proof-trials", "0", "--records", "--verbose"]) == 0
     full = capsys.readouterr().out
     assert "PHL SPEC" in full and "GRASP DETERM: NILTRANS" in full
     assert "seed L2122" in full  # the pruning rule's reference, kept under --verbose

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 import pytest
+from _paths import DATA_AL, GOLDEN, ROOT, SEED_STRATEGIES, TASKS
 
 from synth.al import ast
 from synth.al import values as V
@@ -39,10 +40,7 @@ from synth.models.loader import load_task
 from synth.strategies.records import Destination, PinInHoleStrategy
 from synth.units import CM
 
-ROOT = Path(__file__).resolve().parents[1]
-DATA = ROOT / "tests" / "data"
-GOLDEN = ROOT / "fixtures" / "golden"
-TASKS = ("seed_4_8", "seed_4_8_tap")
+SEED_TASKS = ("seed_4_8", "seed_4_8_tap")
 SEED_LISTING = {"seed_4_8": "seed_4_8_search.al", "seed_4_8_tap": "seed_4_8_tap.al"}
 
 
@@ -55,7 +53,7 @@ def _load(name: str, path: Path) -> ModuleType:
 
 
 REGEN = _load("regen_golden", ROOT / "scripts" / "regen_golden.py")
-SEED = _load("seed_strategies", DATA / "seed_strategies.py")
+SEED = _load("seed_strategies", SEED_STRATEGIES)
 
 
 @cache
@@ -66,7 +64,7 @@ def golden_strategy(task: str) -> tuple[PinInHoleStrategy, AttributeGraph]:
 
 
 def graph_of(task: str) -> AttributeGraph:
-    return AttributeGraph(load_task(ROOT / "fixtures" / "tasks" / f"{task}.yaml"))
+    return AttributeGraph(load_task(TASKS / f"{task}.yaml"))
 
 
 def strategy_of(task: str) -> PinInHoleStrategy:
@@ -82,7 +80,7 @@ def emitted(task: str, **kwargs: Any) -> str:
 # Golden files
 
 
-@pytest.mark.parametrize("task", TASKS)
+@pytest.mark.parametrize("task", SEED_TASKS)
 def test_golden_file_byte_for_byte(task: str) -> None:
     path = GOLDEN / f"{task}.al"
     expected = path.read_bytes()
@@ -167,7 +165,7 @@ def _statement_skeleton(node: Any) -> Any:
 
 
 def seed_listing(task: str) -> ast.Program:
-    path = DATA / "al" / SEED_LISTING[task]
+    path = DATA_AL / SEED_LISTING[task]
     return parse_program(path.read_text(encoding="utf-8"), filename=str(path))
 
 
@@ -187,7 +185,7 @@ def seed_faithful(task: str) -> str:
     return emit_program(strategy, graph)
 
 
-@pytest.mark.parametrize("task", TASKS)
+@pytest.mark.parametrize("task", SEED_TASKS)
 def test_golden_is_the_seed_faithful_program_plus_the_retreat(task: str) -> None:
     # The only difference from the seed's search ending: no arrival abort on the search's
     # guarded move, and a retreat along the hole axis where nothing was felt.
@@ -212,7 +210,7 @@ def test_golden_is_the_seed_faithful_program_plus_the_retreat(task: str) -> None
     assert added[4:] == ["END;"]
 
 
-@pytest.mark.parametrize("task", TASKS)
+@pytest.mark.parametrize("task", SEED_TASKS)
 def test_golden_has_the_seed_listings_statements_in_order(task: str) -> None:
     # Same statements in the same order, same decisions (search loop vs tap), whichever
     # source wrote the golden file (with the seed's own search ending, above), once the via
@@ -230,7 +228,7 @@ def test_golden_has_the_seed_listings_statements_in_order(task: str) -> None:
         assert _statement_skeleton(mine) == expected, format_program(ast.Program((mine,)))
 
 
-@pytest.mark.parametrize("task", TASKS)
+@pytest.mark.parametrize("task", SEED_TASKS)
 def test_seed_records_program_is_the_seed_listing_up_to_numbers_and_units(task: str) -> None:
     # Stronger, on the hand-built records: every expression has the listing's shape too
     # (numbers aside, x*UNIT read as x, ROTN as ROT, relations unnamed).
@@ -262,7 +260,7 @@ def test_decisions_search_loop_versus_tap() -> None:
 
 def programs() -> list[tuple[str, str]]:
     out = []
-    for task in TASKS:
+    for task in SEED_TASKS:
         out.append((task, emitted(task)))
         out.append((f"{task}+preamble", emitted(task, preamble=True)))
     return out
@@ -411,7 +409,7 @@ def fraction(
     raise AssertionError(f"{stop.label} is not on the move")
 
 
-@pytest.mark.parametrize("task", TASKS)
+@pytest.mark.parametrize("task", SEED_TASKS)
 def test_golden_programs_seat_the_pin_in_the_nominal_world(task: str) -> None:
     # Whatever wrote them: the golden files run, the tap (if any) touches the surface where
     # the record believes it is, and the first attempt seats the pin at d_f.
@@ -464,24 +462,32 @@ def test_golden_search_backs_out_of_a_point_where_nothing_is_felt() -> None:
     assert isinstance(distance, V.Scalar) and abs(distance.value) < 1e-9
 
 
-@pytest.mark.parametrize("task", TASKS)
+@pytest.mark.parametrize("task", SEED_TASKS)
 def test_golden_programs_replay_successfully_in_the_nominal_world(task: str) -> None:
     # Every emitted program parses and replays in the nominal world (the referee).
     from synth.replay import replay_program
 
     report = replay_program(
         (GOLDEN / f"{task}.al").read_text(encoding="utf-8"),
-        ROOT / "fixtures" / "tasks" / f"{task}.yaml",
+        TASKS / f"{task}.yaml",
     )
     assert report.nominal.outcome == "success", report.nominal.message
     assert report.nominal.violations == ()
 
 
 def test_stand_alone_file_runs_without_a_binding() -> None:
+    # The preamble declares and places the world itself: seated at the first point, the pin
+    # ends where the task's graph puts BH1, turned φ = 90° and D_F = 1.71 cm deep (the pose
+    # test_search_program_searches_and_seats_at_the_third_point computes, at offset 0).
     machine = ContactMachine(lambda n: SEATED)
     interpreter = Interpreter(machine, hand_names=HAND_NAMES)
     result = interpreter.run(parse_program(emitted("seed_4_8", preamble=True)))
     assert result.completed
+    distance = interpreter.value("DISTANCE_OFF")
+    assert isinstance(distance, V.Scalar) and abs(distance.value) < 1e-9
+    turn = pin.SE3(pin.exp3(np.array([0, 0, math.pi / 2])), np.array([0, 0, -D_F * CM]))
+    seated = graph_of("seed_4_8").world_from("bh1") * turn
+    assert np.allclose(interpreter.frame("PIN1").homogeneous, seated.homogeneous, atol=2e-6)
 
 
 # --------------------------------------------------------------------------------------------
@@ -492,7 +498,7 @@ def test_output_is_deterministic_across_hash_seeds() -> None:
     # Set iteration follows the hash seed: two processes with different seeds must emit the
     # seed's hand-built records (tests/data/seed_strategies.py) byte for byte alike, and alike
     # this process's emission.
-    records = str(DATA / "seed_strategies.py")
+    records = str(SEED_STRATEGIES)
     code = (
         "import importlib.util, sys\n"
         "from synth.codegen.emitter import emit_program\n"
@@ -500,9 +506,9 @@ def test_output_is_deterministic_across_hash_seeds() -> None:
         "from synth.models.loader import load_task\n"
         f"spec = importlib.util.spec_from_file_location('s', {records!r})\n"
         "s = importlib.util.module_from_spec(spec); spec.loader.exec_module(s)\n"
-        f"tasks = {str(ROOT / 'fixtures' / 'tasks')!r}\n"
+        f"tasks = {str(TASKS)!r}\n"
         "sys.stdout.write(''.join(emit_program(s.STRATEGIES[t](), "
-        f"AttributeGraph(load_task(f'{{tasks}}/{{t}}.yaml'))) for t in {tuple(TASKS)!r}))\n"
+        f"AttributeGraph(load_task(f'{{tasks}}/{{t}}.yaml'))) for t in {tuple(SEED_TASKS)!r}))\n"
     )
     outputs = set()
     for seed in ("0", "12345"):
@@ -511,7 +517,7 @@ def test_output_is_deterministic_across_hash_seeds() -> None:
             [sys.executable, "-c", code], env=env, capture_output=True, check=True
         )
         outputs.add(done.stdout)
-    assert outputs == {"".join(emitted(t) for t in TASKS).encode("utf-8")}
+    assert outputs == {"".join(emitted(t) for t in SEED_TASKS).encode("utf-8")}
 
 
 def test_emitter_interface() -> None:

@@ -6,20 +6,17 @@ import json
 from pathlib import Path
 
 import pytest
+from _paths import GOLDEN, SEED_TASK
 
 from synth.al.parser import parse_program
 from synth.cli import main
-
-ROOT = Path(__file__).resolve().parents[1]
-TASK = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
-GOLDEN = ROOT / "fixtures" / "golden"
 
 
 def test_plan_writes_the_program_and_still_prints_the_summary(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out = tmp_path / "out" / "seed_4_8.al"  # the directory is created
-    assert main(["plan", str(TASK), "--proof-trials", "0", "-o", str(out)]) == 0
+    assert main(["plan", str(SEED_TASK), "--proof-trials", "0", "-o", str(out)]) == 0
     printed = capsys.readouterr().out
     assert "Decisions:" in printed and f"AL program written to {out}" in printed
     text = out.read_text(encoding="utf-8")
@@ -30,7 +27,7 @@ def test_plan_writes_the_program_and_still_prints_the_summary(
 def test_plan_json_carries_the_program_and_preamble_makes_it_stand_alone(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    assert main(["plan", str(TASK), "--proof-trials", "0", "--json", "--preamble"]) == 0
+    assert main(["plan", str(SEED_TASK), "--proof-trials", "0", "--json", "--preamble"]) == 0
     document = json.loads(capsys.readouterr().out)
     program = document["program"]
     assert program.startswith("{ World binding of task seed_4_8")
@@ -42,9 +39,12 @@ def test_plan_json_carries_the_program_and_preamble_makes_it_stand_alone(
 def test_plan_without_preamble_json_program_is_the_bare_program(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    assert main(["plan", str(TASK), "--proof-trials", "0", "--json"]) == 0
+    assert main(["plan", str(SEED_TASK), "--proof-trials", "0", "--json"]) == 0
     program = json.loads(capsys.readouterr().out)["program"]
+    # The golden file is this very program (scripts/regen_golden.py: the nominal proof's
+    # program, without a preamble), so the JSON carries it byte for byte.
     assert program.startswith("{ PIN-IN-HOLE STRATEGY")
+    assert program == (GOLDEN / "seed_4_8.al").read_text(encoding="utf-8")
 
 
 def test_plan_output_that_cannot_be_written_is_a_clean_error(
@@ -53,7 +53,8 @@ def test_plan_output_that_cannot_be_written_is_a_clean_error(
     blocker = tmp_path / "file"
     blocker.write_text("x", encoding="utf-8")
     assert (
-        main(["plan", str(TASK), "--proof-trials", "0", "-o", str(blocker / "sub" / "p.al")]) == 2
+        main(["plan", str(SEED_TASK), "--proof-trials", "0", "-o", str(blocker / "sub" / "p.al")])
+        == 2
     )
     err = capsys.readouterr().err
     assert err.startswith("synth plan: error: cannot write") and "Traceback" not in err

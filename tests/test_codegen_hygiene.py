@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 import pytest
+from _paths import SEED_STRATEGIES, TASKS
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from jinja2 import UndefinedError
@@ -29,8 +30,7 @@ from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task, parse_task
 from synth.strategies.records import Destination, PinInHoleStrategy
 
-ROOT = Path(__file__).resolve().parents[1]
-TASKS = ("seed_4_8", "seed_4_8_tap")
+SEED_TASKS = ("seed_4_8", "seed_4_8_tap")
 
 
 def _load(name: str, path: Path) -> ModuleType:
@@ -41,11 +41,11 @@ def _load(name: str, path: Path) -> ModuleType:
     return module
 
 
-SEED = _load("seed_strategies", ROOT / "tests" / "data" / "seed_strategies.py")
+SEED = _load("seed_strategies", SEED_STRATEGIES)
 
 
 def task_path(task: str) -> Path:
-    return ROOT / "fixtures" / "tasks" / f"{task}.yaml"
+    return TASKS / f"{task}.yaml"
 
 
 def graph_of(task: str) -> AttributeGraph:
@@ -59,7 +59,7 @@ def strategy_of(task: str) -> PinInHoleStrategy:
 
 def emitted_programs() -> list[ast.Program]:
     out = []
-    for task in TASKS:
+    for task in SEED_TASKS:
         for preamble in (False, True):
             text = emit_program(strategy_of(task), graph_of(task), preamble=preamble)
             out.append(parse_program(text))
@@ -126,13 +126,29 @@ def test_every_dimensioned_number_carries_a_unit() -> None:
         assert numbers > 30
 
 
-def test_the_unit_check_catches_bare_numbers() -> None:
-    for text in ("X ← 3.54;", "MOVE PIN1 TO BH1*TRANS(NILROTN,VECTOR(0,0,3))", "Y ← -2*R*CM;"):
-        program = parse_program(text)
-        problems = [
-            unit_problem(n, p) for n, p in with_parents(program) if isinstance(n, ast.Number)
-        ]
-        assert any(problems), text
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        # Bare: the number itself, each component of an unscaled VECTOR, and a number whose
+        # parent multiplies it by a variable (the unit further up does not count).
+        ("X ← 3.54;", ["bare number 3.54 in Assign"]),
+        (
+            "MOVE PIN1 TO BH1*TRANS(NILROTN,VECTOR(0,0,3))",
+            ["bare number 0.0 in Call", "bare number 0.0 in Call", "bare number 3.0 in Call"],
+        ),
+        ("Y ← -2*R*CM;", ["bare number 2.0 in BinOp"]),
+        # Carrying a unit: by its parent, through its VECTOR, or as a rotation's axis.
+        ("Y ← -2*CM;", [None]),
+        ("V ← VECTOR(1,2,3)*CM;", [None, None, None]),
+        ("R ← ROT(VECTOR(0,0,1), 90*DEG);", [None, None, None, None]),
+    ],
+)
+def test_the_unit_check_catches_bare_numbers_and_only_them(
+    text: str, expected: list[str | None]
+) -> None:
+    program = parse_program(text)
+    problems = [unit_problem(n, p) for n, p in with_parents(program) if isinstance(n, ast.Number)]
+    assert problems == expected
 
 
 # --------------------------------------------------------------------------------------------
@@ -247,7 +263,7 @@ def test_rotation_forms(axis: tuple[float, ...], degrees: float, text: str) -> N
 
 
 def test_every_identifier_is_validated_and_known() -> None:
-    for task in TASKS:
+    for task in SEED_TASKS:
         graph = graph_of(task)
         frames = {n.upper() for n in graph.al_names.values()} | {"BPARK"}
         program = parse_program(emit_program(strategy_of(task), graph))

@@ -188,11 +188,15 @@ def test_surface_frame_is_a_face() -> None:
 def test_bad_contacts_name_the_field(
     contacts: str, frames_extra: str, path: str, message: str
 ) -> None:
+    text = _spec(contacts, frames_extra)
     with pytest.raises(SpecError) as info:
-        parse_task(_spec(contacts, frames_extra))
+        parse_task(text)
     assert info.value.path == path
     assert message in info.value.detail
-    assert info.value.line is not None
+    # Each contact is one flow line below ``contacts:``, so contacts[k] (and its a, b, kind)
+    # starts k + 1 lines after it.
+    k = int(path.split("[", 1)[1].split("]", 1)[0])
+    assert info.value.line == text.splitlines().index("contacts:") + 1 + k + 1
 
 
 def test_located_frame_must_not_carry_a_pose_or_be_elsewhere() -> None:

@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pinocchio as pin
 import pytest
-from _paths import DATA, TASKS
+from _paths import DATA, SEED_TASK, TASKS
 
 from synth.errors.bounds import build_error_lp, closed_form_bound, solve_error_lp
 from synth.errors.chain import ErrorChain, Fixed, chain_between
@@ -19,12 +19,10 @@ from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
 from synth.units import CM
 
-FIXTURES = TASKS
-
 
 @pytest.fixture(scope="module")
 def screw() -> tuple[AttributeGraph, ErrorChain]:
-    graph = AttributeGraph(load_task(f"{FIXTURES}/screw_on_driver.yaml"))
+    graph = AttributeGraph(load_task(TASKS / "screw_on_driver.yaml"))
     return graph, chain_between(graph, "hole", "tip")
 
 
@@ -198,9 +196,7 @@ def test_certified_footprint_holds_by_monte_carlo(
 
 def test_fixed_chain_has_no_error() -> None:
     chain = ErrorChain(
-        space=chain_between(
-            AttributeGraph(load_task(f"{FIXTURES}/seed_4_8.yaml")), "rack", "pin1"
-        ).space,
+        space=chain_between(AttributeGraph(load_task(SEED_TASK)), "rack", "pin1").space,
         terms=(Fixed(pin.SE3.Identity()),),
     )
     report = estimate_errors(chain)

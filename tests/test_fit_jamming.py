@@ -7,11 +7,11 @@ d = 0.635 cm, μ = 0.3 (the default), so c = (D − d)/D = 0.005/0.64 = 0.007812
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
+from _paths import SEED_PROGRAM, SEED_TASK
 
 from synth.exceptions import SpecError
 from synth.models.graph import AttributeGraph
@@ -24,13 +24,12 @@ from synth.replay.run import replay_context, run_world
 from synth.replay.truth import HandErrors, TrueWorld, nominal_world
 from synth.replay.wedging import two_point_depth, wedges, wedging_onset
 
-SEED = Path(__file__).resolve().parent.parent / "fixtures" / "tasks" / "seed_4_8.yaml"
 D, d, MU = 0.0064, 0.00635, 0.3
 C = 0.005 / 0.64  # clearance ratio, by hand
 
 
 def _seed_text() -> str:
-    return SEED.read_text(encoding="utf-8")
+    return SEED_TASK.read_text(encoding="utf-8")
 
 
 def _with_diameters(pin: str, bh1: str) -> str:
@@ -51,7 +50,9 @@ def test_a_pin_wider_than_its_hole_is_refused_at_load_naming_the_fit() -> None:
 
 def test_an_equal_diameter_does_not_fit_and_a_thinner_pin_does() -> None:
     # zero clearance: c = 0, no tilt at all is admissible, so the pin cannot go in
-    assert fit_problem("P", 0.0064, "H", 0.0064) is not None
+    assert fit_problem("P", 0.0064, "H", 0.0064) == (
+        "pin P (0.64 cm) does not fit hole H (0.64 cm): a pin must be thinner than its hole"
+    )
     assert fit_problem("P", 0.00635, "H", 0.0064) is None
     text = _seed_text().replace("diameter: 0.635 cm", "diameter: 0.64 cm")
     with pytest.raises(SpecError, match=r"pin PIN1 \(0.64 cm\) does not fit hole BH1"):
@@ -87,7 +88,8 @@ def test_replay_onset_solves_the_exact_two_point_balance() -> None:
     # the two models agree to first order: the exact onset is c/μ + 5.6 % (the θ² terms the
     # small-angle limit drops), and the planner's c/μ is the lower, i.e. conservative, one
     planner = wedging_tilt(D, d, MU)
-    assert planner < onset < 1.1 * planner
+    assert planner < onset  # conservative
+    assert onset / planner == pytest.approx(0.027512 / math.radians(1.4921), abs=1e-4)  # 1.0564
     # wedging needs the two-point contact before the seat: h(2°) = 0.12 cm
     assert wedges(math.radians(2.0), D, d, MU, seat=0.0171)
     assert not wedges(math.radians(2.0), D, d, MU, seat=0.001)
@@ -95,7 +97,7 @@ def test_replay_onset_solves_the_exact_two_point_balance() -> None:
 
 
 def test_derived_dtheta_never_exceeds_the_wedging_limit() -> None:
-    spec = load_task(SEED)
+    spec = load_task(SEED_TASK)
     assert spec.insertion is not None
     graph = AttributeGraph(spec)
     given = derive(graph, spec.insertion)
@@ -113,7 +115,7 @@ def test_derived_dtheta_never_exceeds_the_wedging_limit() -> None:
 
 @pytest.fixture(scope="module")
 def seed_cell():  # type: ignore[no-untyped-def]
-    graph = AttributeGraph(load_task(SEED))
+    graph = AttributeGraph(load_task(SEED_TASK))
     cell = WorkcellModel(graph).place(NominalPoses(graph))
     return cell, cell.hole("bh1"), cell.pins["pin1"]
 
@@ -153,8 +155,8 @@ def _box_tilted(graph: AttributeGraph, degrees: float) -> TrueWorld:
 def test_the_seed_program_wedges_in_a_box_tilted_past_the_onset(degrees, outcome) -> None:  # type: ignore[no-untyped-def]
     # the held pin stays vertical, so its tilt at entry is the box's: 1.0° is below the replay's
     # onset 1.576°, 2.5° above it
-    program = (SEED.parent.parent / "golden" / "seed_4_8.al").read_text(encoding="utf-8")
-    context = replay_context(program, SEED)
+    program = SEED_PROGRAM.read_text(encoding="utf-8")
+    context = replay_context(program, SEED_TASK)
     report = run_world(context, _box_tilted(context.graph, degrees), HandErrors.none())
     assert report.outcome == outcome
     if outcome == "violation":

@@ -16,6 +16,7 @@ from typing import Any
 
 import pytest
 import yaml
+from _paths import ROOT, SEED_TASK
 
 from synth.al import interpreter as interpreter_module
 from synth.al.names import (
@@ -33,8 +34,6 @@ from synth.al.values import CONSTANTS as VALUE_CONSTANTS
 from synth.exceptions import SpecError
 from synth.models.loader import validate_task
 
-ROOT = Path(__file__).resolve().parents[1]
-SEED = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
 SYNTH = [sys.executable, "-m", "synth.cli"]
 
 DOCUMENTED_PREDECLARED = (
@@ -70,7 +69,7 @@ CONTROL = [
 
 
 def seed() -> dict[str, Any]:
-    data: dict[str, Any] = yaml.safe_load(SEED.read_text(encoding="utf-8"))
+    data: dict[str, Any] = yaml.safe_load(SEED_TASK.read_text(encoding="utf-8"))
     return data
 
 
@@ -181,8 +180,15 @@ def test_control_characters_are_refused_anywhere_in_a_name(field: str, char: str
 def test_a_name_must_match_in_full_and_be_ascii(value: str) -> None:
     # re.match(r"^…$") accepted "BH1\n" ($ matches before a final newline); Unicode letters and
     # digits (Greek capital beta, superscript two, full-width letters) are not AL identifiers.
-    assert al_name_problem(value) is not None
-    assert al_name_problem(value, role="arm") is not None
+    # Refused as such, for every role, before the keyword or unit tables are consulted
+    # ("END\n" would otherwise be "an AL keyword", whatever the full match said).
+    why = (
+        f"{value!r} is not an AL identifier: an ASCII letter followed by letters, digits and "
+        "'_', with no space or control character"
+    )
+    assert al_name_problem(value) == why
+    assert al_name_problem(value, role="arm") == why
+    assert al_name_problem(value, role="park") == why
 
 
 def test_a_frame_name_may_not_be_another_frame_al_name() -> None:

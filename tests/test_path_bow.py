@@ -11,11 +11,11 @@ from __future__ import annotations
 
 import itertools
 import math
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
+from _paths import DATA_TASKS, SEED_TASK
 from _tasks import synthesized
 
 from synth.models.arm import nearest_solution
@@ -25,9 +25,7 @@ from synth.strategies.context import PlanContext, plan_context
 from synth.strategies.planner import plan_task
 from synth.strategies.records import PinInHoleStrategy
 
-ROOT = Path(__file__).resolve().parent.parent
-SEED = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
-PRECISION = ROOT / "tests" / "data" / "tasks" / "precision_fit.yaml"
+PRECISION = DATA_TASKS / "precision_fit.yaml"
 DENSE = 2000
 
 
@@ -60,7 +58,7 @@ def dense_bow(ctx: PlanContext, s: PinInHoleStrategy, *, vias: bool = True) -> f
 
 @pytest.fixture(scope="module")
 def seed():
-    spec = load_task(SEED)
+    spec = load_task(SEED_TASK)
     return plan_context(spec), plan_task(spec).strategy
 
 

@@ -13,8 +13,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _paths import SEED_TAP_TASK, SEED_TASK
 from _svg import SvgFigure
-from _tasks import FIXTURES, synthesized
+from _tasks import synthesized
 
 from synth.cli import main
 from synth.models.loader import load_task
@@ -23,20 +24,19 @@ from synth.pictures.render import figure_bytes
 from synth.replay.report import ReplayReport
 from synth.replay.run import replay_graph, replay_program, world_errors
 
-TASK = FIXTURES / "seed_4_8.yaml"
 TRIALS = 24
 INCH_CM = 2.54
 
 
 @pytest.fixture(scope="module")
 def program() -> str:
-    return synthesized(FIXTURES / "seed_4_8_tap.yaml").program
+    return synthesized(SEED_TAP_TASK).program
 
 
 @pytest.fixture(scope="module")
 def run(program: str) -> tuple[ReplayReport, list[dict[str, dict[str, float]]], SvgFigure]:
-    report = replay_program(program, TASK, trials=TRIALS, seed=3, filename="tap.al")
-    graph = replay_graph(load_task(TASK))
+    report = replay_program(program, SEED_TASK, trials=TRIALS, seed=3, filename="tap.al")
+    graph = replay_graph(load_task(SEED_TASK))
     errors = [world_errors(graph, 3, i) for i in range(TRIALS)]
     svg = SvgFigure(figure_bytes(draw_montecarlo(montecarlo_picture(report, errors, graph))))
     return report, errors, svg
@@ -99,7 +99,7 @@ def test_cli_writes_the_picture_and_needs_trials(tmp_path: Path, program: str) -
     al = tmp_path / "tap.al"
     al.write_text(program, encoding="utf-8")
     out = tmp_path / "mc.svg"
-    args = ["replay", str(al), "--task", str(TASK), "--workers", "1", "--svg", str(out)]
+    args = ["replay", str(al), "--task", str(SEED_TASK), "--workers", "1", "--svg", str(out)]
     assert main([*args, "--trials", "4"]) == 0
     assert SvgFigure(out.read_bytes()).has("mc-0-1")
     assert main([*args, "--trials", "0"]) == 2

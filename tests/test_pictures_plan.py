@@ -14,8 +14,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _paths import ROOT, SEED_TAP_TASK, SEED_TASK
 from _svg import SvgFigure
-from _tasks import FIXTURES, synthesized
+from _tasks import synthesized
 
 from synth.cli import main
 from synth.pictures.plan import draw_plan, plan_picture
@@ -28,12 +29,12 @@ NUMBER = re.compile(r"(?<![A-Za-z_\d])[-+−]?\d+(?:\.\d+)?(?![A-Za-z_\d])")
 
 @pytest.fixture(scope="module")
 def seed() -> Synthesis:
-    return synthesized(FIXTURES / "seed_4_8.yaml")
+    return synthesized(SEED_TASK)
 
 
 @pytest.fixture(scope="module")
 def tap() -> Synthesis:
-    return synthesized(FIXTURES / "seed_4_8_tap.yaml")
+    return synthesized(SEED_TAP_TASK)
 
 
 def svg_of(result: Synthesis) -> SvgFigure:
@@ -158,7 +159,7 @@ def test_every_label_carries_its_unit(seed: Synthesis, tap: Synthesis) -> None:
 
 def test_cli_writes_svg_and_png(tmp_path: Path) -> None:
     svg, png = tmp_path / "plan.svg", tmp_path / "out" / "plan.png"
-    task = str(FIXTURES / "seed_4_8.yaml")
+    task = str(SEED_TASK)
     assert main(["plan", task, "--proof-trials", "0", "--workers", "1", "--svg", str(svg)]) == 0
     assert SvgFigure(svg.read_bytes()).has("search-points")
     assert main(["plan", task, "--proof-trials", "0", "--workers", "1", "--svg", str(png)]) == 0
@@ -167,7 +168,7 @@ def test_cli_writes_svg_and_png(tmp_path: Path) -> None:
 
 
 def test_the_readme_picture_is_the_seeds_plan(seed: Synthesis) -> None:
-    committed = SvgFigure((FIXTURES.parents[1] / "docs" / "img" / "seed_4_8_plan.svg").read_bytes())
+    committed = SvgFigure((ROOT / "docs" / "img" / "seed_4_8_plan.svg").read_bytes())
     drawn = committed.to_data("top-view", committed.uses("search-points"))
     expected = CM * plan_picture(seed.strategy, seed.graph).search_points
     np.testing.assert_allclose(drawn, expected, atol=2e-3)

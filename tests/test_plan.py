@@ -13,7 +13,7 @@ import math
 from pathlib import Path
 
 import pytest
-from _paths import TASKS
+from _paths import SEED_TAP_TASK, SEED_TASK, TASKS
 from _tasks import plannable
 
 from synth.cli import main
@@ -22,18 +22,16 @@ from synth.models.loader import load_task, parse_task
 from synth.strategies import PlanOptions, plan_task
 from synth.units import CM, INCH
 
-FIXTURES = TASKS
-
 
 @pytest.fixture(scope="module")
 def seed():
-    spec = load_task(FIXTURES / "seed_4_8.yaml")
+    spec = load_task(SEED_TASK)
     return plan_task(spec), plan_task(spec, options=PlanOptions(exhaustive=True))
 
 
 @pytest.fixture(scope="module")
 def tap():
-    spec = load_task(FIXTURES / "seed_4_8_tap.yaml")
+    spec = load_task(SEED_TAP_TASK)
     return plan_task(spec), plan_task(spec, options=PlanOptions(exhaustive=True))
 
 
@@ -107,19 +105,19 @@ def test_best_first_and_exhaustive_agree(seed, tap) -> None:
     # The cutoff saves work where a cheap candidate's refinement beats the gross times of the
     # rest: on the fixture-located box (1 of 5 refined, benchmarks/plan.py); the seed tasks'
     # candidates now all pass within the cutoff, so there it saves nothing.
-    located = load_task(FIXTURES / "seed_4_8_fixture.yaml")
+    located = load_task(TASKS / "seed_4_8_fixture.yaml")
     bf, ex = plan_task(located), plan_task(located, options=PlanOptions(exhaustive=True))
     assert bf.strategy.name == ex.strategy.name and bf.refined < ex.refined
 
 
 def test_decisions_do_not_depend_on_the_timing_rule() -> None:
-    spec = load_task(FIXTURES / "seed_4_8.yaml")
+    spec = load_task(SEED_TASK)
     result = plan_task(spec, options=PlanOptions(timing_rule="seed"))
     assert result.strategy.search is not None and result.strategy.tap is None
 
 
 def test_cli_json_and_text(capsys) -> None:
-    assert main(["plan", str(FIXTURES / "seed_4_8.yaml"), "--json", "--proof-trials", "0"]) == 0
+    assert main(["plan", str(SEED_TASK), "--json", "--proof-trials", "0"]) == 0
     doc = json.loads(capsys.readouterr().out)
     strategy = doc["strategy"]
     assert strategy["tap"] is None
@@ -145,7 +143,7 @@ def test_cli_json_and_text(capsys) -> None:
         main(
             [
                 "plan",
-                str(FIXTURES / "seed_4_8_tap.yaml"),
+                str(SEED_TAP_TASK),
                 "--exhaustive",
                 "--records",
                 "--proof-trials",
@@ -161,7 +159,7 @@ def test_cli_json_and_text(capsys) -> None:
 
 
 def _variant(tmp_path: Path, old: str, new: str) -> Path:
-    text = (FIXTURES / "seed_4_8.yaml").read_text()
+    text = SEED_TASK.read_text()
     assert old in text
     path = tmp_path / "variant.yaml"
     path.write_text(text.replace(old, new))
@@ -217,7 +215,7 @@ def test_a_given_dr_ok_beyond_the_parts_lead_is_remarked(seed) -> None:
     notes = [d for d in result.strategy.decisions if d.startswith("note:") and "Δr_ok" in d]
     assert len(notes) == 1 and "0.762 cm" in notes[0] and "0.440 cm" in notes[0]
     # Without the given value Δr_ok is the lead itself, and nothing is remarked.
-    spec = load_task(FIXTURES / "seed_4_8.yaml")
+    spec = load_task(SEED_TASK)
     assert spec.insertion is not None
     derived = spec.model_copy(
         update={"insertion": spec.insertion.model_copy(update={"dr_ok": None})}

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _paths import SEED_TASK, TASKS
 from _tasks import plannable, synthesized, with_base
 
 from synth.codegen.emitter import emit_program
@@ -37,13 +38,12 @@ from synth.strategies.grasp import (
 from synth.strategies.records import Grasp, Rejection
 from synth.units import DEG
 
-FIXTURES = Path(__file__).parent.parent / "fixtures" / "tasks"
 OBSTRUCTED = "ω=180° γ=100° d=3.54 cm"
 
 
 @pytest.fixture(scope="module")
 def old_base() -> TaskSpec:
-    return with_base(load_task(FIXTURES / "seed_4_8.yaml"), 20, 80, 225)
+    return with_base(load_task(SEED_TASK), 20, 80, 225)
 
 
 def test_the_sweep_rejects_the_pickup_whose_move_from_park_hits_the_box(old_base) -> None:
@@ -80,11 +80,11 @@ def test_without_the_sweep_the_replay_catches_the_collision(old_base, monkeypatc
     checked = plan_task(old_base).strategy
     assert unchecked.name.startswith(OBSTRUCTED) and not checked.name.startswith(OBSTRUCTED)
     graph = believed_graph(old_base)
-    refused = replay_program(emit_program(unchecked, graph), old_base, base_dir=FIXTURES)
+    refused = replay_program(emit_program(unchecked, graph), old_base, base_dir=TASKS)
     assert refused.nominal.outcome == "violation"
     kinds = {(v.kind, v.line) for v in refused.nominal.violations}
     assert ("collision", 9) in kinds and "BOX" in refused.nominal.message  # the first MOVE
-    accepted = replay_program(emit_program(checked, graph), old_base, base_dir=FIXTURES)
+    accepted = replay_program(emit_program(checked, graph), old_base, base_dir=TASKS)
     assert accepted.nominal.outcome == "success", accepted.nominal.message
 
 
@@ -103,7 +103,7 @@ def test_box_margin_bounds_every_sampled_displacement_of_its_corners() -> None:
     # BOX under ±0.3 in, ±0.2 in, ±5° (L2566): its margin is |t|max + θmax·r with r the radius
     # of its bounding ball about its origin. Sampled: the corners' largest displacement over
     # 20 000 uniform errors (the extreme points of a box are its corners).
-    spec = load_task(FIXTURES / "seed_4_8.yaml")
+    spec = load_task(SEED_TASK)
     ctx = plan_context(spec)
     displacement = ctx.gross.empty.displacements["BOX"]
     margin = displacement.bound()
@@ -138,7 +138,7 @@ def test_with_margins_no_sampled_world_hits_the_box_on_the_gross_motions(old_bas
     # collide anywhere; with p = 56/300, 0 of 60 would have chance
     # (1 − 0.187)^60 ≈ 4e-6.
     program = emit_program(plan_task(old_base).strategy, believed_graph(old_base))
-    report = replay_program(program, old_base, trials=60, seed=1, workers=2, base_dir=FIXTURES)
+    report = replay_program(program, old_base, trials=60, seed=1, workers=2, base_dir=TASKS)
     hits = [v for run in report.trials for v in run.violations if v.kind == "collision"]
     assert report.nominal.outcome == "success" and hits == []
 
@@ -152,7 +152,7 @@ def test_swept_configurations_are_the_ones_the_replay_moves_through(task: str) -
     from synth.strategies.approach import hand_at, hole_frame_offset, plan_approach
     from synth.strategies.records import Rejection
 
-    ctx = plan_context(load_task(FIXTURES / f"{task}.yaml"))
+    ctx = plan_context(load_task(TASKS / f"{task}.yaml"))
     pickups, _ = generate_pickups(ctx, try_harder=True)
     assert pickups
     for p in pickups:

@@ -11,11 +11,11 @@
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
+from _paths import DATA_TASKS
 from _tasks import synthesized
 
 from synth.models.arm import CollisionScene, nearest_solution
@@ -26,9 +26,8 @@ from synth.strategies.planner import plan_task
 from synth.strategies.records import Grasp
 from synth.units import CM, DEG
 
-TASKS = Path(__file__).resolve().parent / "data" / "tasks"
-DOWEL = TASKS / "short_dowel_plate.yaml"
-SIDEWAYS = TASKS / "sideways_error.yaml"
+DOWEL = DATA_TASKS / "short_dowel_plate.yaml"
+SIDEWAYS = DATA_TASKS / "sideways_error.yaml"
 
 
 @pytest.fixture(scope="module")
@@ -132,7 +131,7 @@ def test_approach_height_follows_the_certified_height_error() -> None:
     # seed_4_8_tap with the box ±1 in along z: Δz at the approach (box z and the hand's z error,
     # certified) exceeds the seed's 1 in standoff, which refused the task. The approach rises to
     # Δz + the held pin's sweep margin + 1 mm, the target to d_f + Δz + 1 mm.
-    path = TASKS / "height_error.yaml"
+    path = DATA_TASKS / "height_error.yaml"
     spec = load_task(path)
     ctx = plan_context(spec)
     proven = synthesized(path, trials=10)

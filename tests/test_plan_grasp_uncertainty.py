@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
+from _paths import DATA_TASKS, TASKS
 
 from synth.exceptions import NoStrategyError
 from synth.models.loader import load_task
@@ -16,9 +16,6 @@ from synth.strategies.grasp import centering_bounds
 from synth.strategies.planner import plan_task
 from synth.strategies.records import Grasp
 
-TASKS = Path(__file__).resolve().parent / "data" / "tasks"
-FIXTURES = Path(__file__).resolve().parent.parent / "fixtures" / "tasks"
-
 
 def _error(x: float, y: float, rz: float) -> pin.SE3:
     return pin.SE3(pin.exp3(np.array([0.0, 0.0, rz])), np.array([x, y, 0.0]))
@@ -26,8 +23,8 @@ def _error(x: float, y: float, rz: float) -> pin.SE3:
 
 def test_bound_covers_the_exact_chain_and_is_tight() -> None:
     """Closing offset of the pin at the grasp: certified bound vs the exact chain's corners."""
-    spec = load_task(TASKS / "uncertain_rack.yaml")
-    ctx = plan_context(spec, None, FIXTURES)
+    spec = load_task(DATA_TASKS / "uncertain_rack.yaml")
+    ctx = plan_context(spec, None, TASKS)
     grasp = Grasp(math.radians(90), math.pi, 0.035425)
     bounds = centering_bounds(ctx, grasp)
     world_rack = ctx.graph.world_from("rack")
@@ -54,16 +51,16 @@ def test_bound_covers_the_exact_chain_and_is_tight() -> None:
 
 def test_rack_known_to_a_quarter_inch_is_refused_at_the_pads() -> None:
     """±0.25 in in x and y: no ω puts the pin within the pads' 0.25 in radius across."""
-    spec = load_task(TASKS / "uncertain_rack.yaml")
+    spec = load_task(DATA_TASKS / "uncertain_rack.yaml")
     with pytest.raises(NoStrategyError) as caught:
-        plan_task(spec, base_dir=FIXTURES)
+        plan_task(spec, base_dir=TASKS)
     assert "finger pads" in str(caught.value)
 
 
 def test_rail_rack_plans_with_a_wider_opening() -> None:
     """±0.75 in along the rail: the opening widens past the seed's 1 in + diameter (L2139)."""
-    spec = load_task(TASKS / "uncertain_rack_rail.yaml")
-    result = plan_task(spec, base_dir=FIXTURES)
+    spec = load_task(DATA_TASKS / "uncertain_rack_rail.yaml")
+    result = plan_task(spec, base_dir=TASKS)
     pickup = result.strategy.pickup
     assert pickup.approach_opening > 0.00635 + 0.0254
     assert pickup.approach_opening <= 4.5 * 0.0254  # the hand's largest opening (L1984)
@@ -72,9 +69,9 @@ def test_rail_rack_plans_with_a_wider_opening() -> None:
 
 def test_rack_beyond_the_hands_opening_is_refused_naming_the_opening() -> None:
     """±2.25 in along the rail: the hand's 4.5 in opening leaves 5.40 cm, too little."""
-    spec = load_task(TASKS / "uncertain_rack_wide.yaml")
+    spec = load_task(DATA_TASKS / "uncertain_rack_wide.yaml")
     with pytest.raises(NoStrategyError) as caught:
-        plan_task(spec, base_dir=FIXTURES)
+        plan_task(spec, base_dir=TASKS)
     assert "largest opening" in str(caught.value)
 
 
@@ -84,8 +81,8 @@ def test_rail_rack_program_grasps_in_every_sampled_world() -> None:
     from synth.models.believed import believed_graph
     from synth.replay.run import replay_program
 
-    spec = load_task(TASKS / "uncertain_rack_rail.yaml")
-    result = plan_task(spec, base_dir=FIXTURES)
+    spec = load_task(DATA_TASKS / "uncertain_rack_rail.yaml")
+    result = plan_task(spec, base_dir=TASKS)
     program = emit_program(result.strategy, believed_graph(spec))
     report = replay_program(program, spec, trials=100, seed=0)
     assert report.nominal.outcome == "success"

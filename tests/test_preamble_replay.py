@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from _paths import ROOT, SEED_FIRST_CUT, SEED_TASK
 
 from synth.al import ast
 from synth.al.parser import parse_program
@@ -20,10 +21,6 @@ from synth.codegen.binding import bind_world, preamble
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
 from synth.replay import replay_program
-
-ROOT = Path(__file__).resolve().parents[1]
-SEED = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
-FIRST_CUT = Path(__file__).parent / "data" / "al" / "seed_4_8_first_cut.al"
 
 
 def top_level(text: str) -> tuple[ast.Stmt, ...]:
@@ -34,11 +31,11 @@ def top_level(text: str) -> tuple[ast.Stmt, ...]:
 
 
 def test_preamble_before_a_program_replays_like_the_program() -> None:
-    graph = AttributeGraph(load_task(SEED))
-    bare = FIRST_CUT.read_text(encoding="utf-8")
+    graph = AttributeGraph(load_task(SEED_TASK))
+    bare = SEED_FIRST_CUT.read_text(encoding="utf-8")
     head = preamble(graph)
-    alone = replay_program(bare, SEED)
-    with_head = replay_program(head + "\n" + bare, SEED)
+    alone = replay_program(bare, SEED_TASK)
+    with_head = replay_program(head + "\n" + bare, SEED_TASK)
     assert alone.nominal.outcome == with_head.nominal.outcome == "success"
     assert with_head.nominal.time == pytest.approx(alone.nominal.time, abs=1e-9)
     # Each preamble statement runs once: the declarations, then one assignment or AFFIX a frame.
@@ -57,14 +54,16 @@ def test_preamble_before_a_program_replays_like_the_program() -> None:
     ],
 )
 def test_a_bound_frame_is_adopted_once_and_only_with_its_type(program: str, message: str) -> None:
-    report = replay_program(program, SEED)
+    report = replay_program(program, SEED_TASK)
     assert report.nominal.outcome == "error"
     assert message in report.nominal.message
 
 
 def test_a_program_may_still_declare_its_own_frames_twice_in_nested_blocks() -> None:
     # Shadowing in an inner block is a new variable, not the binding's frame.
-    report = replay_program("BEGIN FRAME BOX; BOX ← FRAME(NILROTN, VECTOR(0,0,1)*CM); END;", SEED)
+    report = replay_program(
+        "BEGIN FRAME BOX; BOX ← FRAME(NILROTN, VECTOR(0,0,1)*CM); END;", SEED_TASK
+    )
     assert report.nominal.outcome != "error", report.nominal.message
 
 
@@ -74,7 +73,7 @@ def test_cli_plan_preamble_output_replays(tmp_path: Path) -> None:
     synth = [sys.executable, "-m", "synth.cli"]
     args = ["--preamble", "-o", str(out), "--proof-trials", "0", "--workers", "1"]
     plan = subprocess.run(
-        [*synth, "plan", str(SEED), *args],
+        [*synth, "plan", str(SEED_TASK), *args],
         capture_output=True,
         text=True,
         timeout=300,
@@ -83,7 +82,7 @@ def test_cli_plan_preamble_output_replays(tmp_path: Path) -> None:
     assert plan.returncode == 0, plan.stderr
     assert out.read_text(encoding="utf-8").startswith("{ World binding of task seed_4_8")
     again = subprocess.run(
-        [*synth, "replay", str(out), "--task", str(SEED), "--trials", "0", "--workers", "1"],
+        [*synth, "replay", str(out), "--task", str(SEED_TASK), "--trials", "0", "--workers", "1"],
         capture_output=True,
         text=True,
         timeout=300,

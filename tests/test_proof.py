@@ -12,11 +12,11 @@ from __future__ import annotations
 import itertools
 import json
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
-from _tasks import FIXTURES, synthesized
+from _paths import DATA_TASKS, SEED_FIRST_CUT, SEED_PROGRAM, SEED_TASK, TASKS
+from _tasks import synthesized
 
 from synth.cli import DEFAULT_MIN_SUCCESS as CLI_MIN_SUCCESS
 from synth.cli import DEFAULT_PROOF_TRIALS as CLI_PROOF_TRIALS
@@ -38,9 +38,6 @@ from synth.replay.trials import TrialPool
 from synth.replay.truth import sample_world
 from synth.strategies import PlanOptions, plan_task
 from synth.strategies.records import Rejection
-
-SEED = FIXTURES / "seed_4_8.yaml"
-FIRST_CUT = Path(__file__).resolve().parent / "data" / "al" / "seed_4_8_first_cut.al"
 
 
 def _sequential(options: ProofOptions, outcomes: list[bool]) -> tuple[bool, int]:
@@ -109,7 +106,7 @@ def test_cli_defaults_match_the_proof_module() -> None:
 
 
 def test_options_come_from_the_task_unless_given() -> None:
-    text = SEED.read_text()
+    text = SEED_TASK.read_text()
     spec = parse_task(text + "proof: {min_success: 0.9, trials: 40}\n")
     assert (ProofOptions.for_task(spec).trials, ProofOptions.for_task(spec).min_success) == (
         40,
@@ -117,14 +114,14 @@ def test_options_come_from_the_task_unless_given() -> None:
     )
     given = ProofOptions.for_task(spec, trials=7, min_success=0.5)
     assert (given.trials, given.min_success) == (7, 0.5)
-    assert ProofOptions.for_task(load_task(SEED)).trials == DEFAULT_PROOF_TRIALS
+    assert ProofOptions.for_task(load_task(SEED_TASK)).trials == DEFAULT_PROOF_TRIALS
 
 
 @pytest.fixture(scope="module")
 def first_cut_proof():
-    spec = load_task(SEED)
-    text = FIRST_CUT.read_text()
-    return spec, text, prove(text, spec, ProofOptions(trials=100, seed=0), base_dir=FIXTURES)
+    spec = load_task(SEED_TASK)
+    text = SEED_FIRST_CUT.read_text()
+    return spec, text, prove(text, spec, ProofOptions(trials=100, seed=0), base_dir=TASKS)
 
 
 def test_a_failing_program_is_rejected_early_with_the_replays_reason(first_cut_proof) -> None:
@@ -138,7 +135,7 @@ def test_a_failing_program_is_rejected_early_with_the_replays_reason(first_cut_p
     reason = proof.reason()
     assert f"AL line {failure.line}" in reason and failure.outcome in reason
     # The errors reported are the trial's own draw: the same generator as run_trial's.
-    context = replay_context(text, spec, base_dir=FIXTURES)
+    context = replay_context(text, spec, base_dir=TASKS)
     world_seed, _ = trial_seed(0, failure.index).spawn(2)
     world = sample_world(context.graph, np.random.default_rng(world_seed))
     assert failure.errors == world.parameters
@@ -151,7 +148,7 @@ def test_a_failing_program_is_rejected_early_with_the_replays_reason(first_cut_p
 def test_the_proof_is_the_same_on_one_and_two_workers(first_cut_proof) -> None:
     spec, text, one = first_cut_proof
     with TrialPool(2) as pool:
-        two = prove(text, spec, ProofOptions(trials=100, seed=0), base_dir=FIXTURES, pool=pool)
+        two = prove(text, spec, ProofOptions(trials=100, seed=0), base_dir=TASKS, pool=pool)
     assert (two.trials, two.successes, two.decided_by, dict(two.outcomes)) == (
         one.trials,
         one.successes,
@@ -164,7 +161,7 @@ def test_the_proof_is_the_same_on_one_and_two_workers(first_cut_proof) -> None:
 def test_a_refused_candidate_sends_the_planner_to_the_next_best() -> None:
     # accept() stands for a failed proof: the plan must fall back to the best of the others,
     # which is exhaustive selection's best once the refused candidate is left out.
-    spec = load_task(SEED)
+    spec = load_task(SEED_TASK)
     first = plan_task(spec).strategy
     refused: list[str] = []
 
@@ -187,7 +184,7 @@ def test_a_refused_candidate_sends_the_planner_to_the_next_best() -> None:
 
 
 def test_no_proven_candidate_names_the_proof_as_root_cause() -> None:
-    spec = load_task(SEED)
+    spec = load_task(SEED_TASK)
     with pytest.raises(NoStrategyError) as info:
         plan_task(
             spec,
@@ -198,7 +195,7 @@ def test_no_proven_candidate_names_the_proof_as_root_cause() -> None:
 
 
 def test_synthesize_proves_the_seed_program_and_reports_it() -> None:
-    synthesis = synthesized(SEED, trials=20)
+    synthesis = synthesized(SEED_TASK, trials=20)
     proof = synthesis.proof
     assert proof.passed and proof.trials == 20 and proof.outcomes == {"success": 20}
     assert [a.candidate for a in synthesis.attempts] == [synthesis.strategy.name]
@@ -209,14 +206,14 @@ def test_synthesize_proves_the_seed_program_and_reports_it() -> None:
 
 def test_cli_reports_the_proof_and_checks_its_options(tmp_path, capsys) -> None:
     out = tmp_path / "p.al"
-    assert main(["plan", str(SEED), "--proof-trials", "0", "-o", str(out)]) == 0
+    assert main(["plan", str(SEED_TASK), "--proof-trials", "0", "-o", str(out)]) == 0
     text = capsys.readouterr().out
     assert "Proof: nominal replay passed" in text and out.read_text().startswith("{")
-    assert main(["plan", str(SEED), "--proof-trials", "0", "--json"]) == 0
+    assert main(["plan", str(SEED_TASK), "--proof-trials", "0", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["proof"]["passed"] and doc["proof"]["decided_by"] == "nominal-only"
     for bad in (["--min-success", "1.5"], ["--proof-trials", "-1"], ["--workers", "0"]):
-        assert main(["plan", str(SEED), *bad]) == 2
+        assert main(["plan", str(SEED_TASK), *bad]) == 2
         assert bad[0] in capsys.readouterr().err
 
 
@@ -225,8 +222,8 @@ def test_a_pin_from_an_uncertain_rack_is_relocated_after_center_and_proven() -> 
     # must believe the pin where the hand now is (PIN1 ← BMANIP*TRANS(grasp⁻¹)); with AFFIX
     # alone the believed grip kept the rack's error and 2 of the first 19 trials missed BH1
     # (the proof rejected all three candidates). The seed's exact rack emits no such line.
-    rail = Path(__file__).resolve().parent / "data" / "tasks" / "uncertain_rack_rail.yaml"
+    rail = DATA_TASKS / "uncertain_rack_rail.yaml"
     proven = synthesized(rail, trials=20)
     assert "PIN1 ← BMANIP*TRANS(" in proven.program
     assert proven.proof.passed and proven.proof.outcomes == {"success": 20}
-    assert "PIN1 ← BMANIP" not in (FIXTURES.parent / "golden" / "seed_4_8.al").read_text()
+    assert "PIN1 ← BMANIP" not in SEED_PROGRAM.read_text()

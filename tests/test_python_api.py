@@ -10,11 +10,11 @@ import textwrap
 from pathlib import Path
 
 import pytest
+from _paths import ROOT
 
 import synth
 from synth.replay import trials
 
-ROOT = Path(__file__).resolve().parents[1]
 DOC = ROOT / "docs" / "python-api.md"
 
 

@@ -9,18 +9,14 @@ index) (:mod:`synth.replay.run`). Dask is the ``dask`` extra, which ``make test`
 from __future__ import annotations
 
 from collections.abc import Iterator
-from pathlib import Path
 from typing import Any
 
 import distributed
 import pytest
+from _paths import SEED_SEARCH, SEED_TASK
 
 from synth.cli import main
 from synth.replay import replay_program
-
-ROOT = Path(__file__).parent.parent
-SEED_TASK = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
-SEARCH = ROOT / "tests" / "data" / "al" / "seed_4_8_search.al"
 
 
 @pytest.fixture(scope="module")
@@ -34,7 +30,7 @@ def client() -> Iterator[Any]:
 
 
 def test_a_cluster_gives_the_local_report(client: Any) -> None:
-    text = SEARCH.read_text(encoding="utf-8")
+    text = SEED_SEARCH.read_text(encoding="utf-8")
     # 20 trials of seed 0 include trial 18, the listing's abort beside the box
     on_cluster = replay_program(text, SEED_TASK, trials=20, seed=0, client=client)
     local = replay_program(text, SEED_TASK, trials=20, seed=0, workers=1)
@@ -44,6 +40,6 @@ def test_a_cluster_gives_the_local_report(client: Any) -> None:
 
 
 def test_an_unreachable_scheduler_is_a_usage_error(capsys: pytest.CaptureFixture[str]) -> None:
-    argv = ["replay", str(SEARCH), "--task", str(SEED_TASK), "--trials", "2"]
+    argv = ["replay", str(SEED_SEARCH), "--task", str(SEED_TASK), "--trials", "2"]
     assert main([*argv, "--dask", "tcp://127.0.0.1:9"]) == 2
     assert "--dask tcp://127.0.0.1:9: cannot reach the scheduler" in capsys.readouterr().err

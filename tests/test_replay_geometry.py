@@ -9,11 +9,11 @@ straight lines whose first contact is worked out by hand.
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
+from _paths import SEED_TASK
 
 from synth.models.arm.collision import Obstacle
 from synth.models.graph import AttributeGraph
@@ -24,8 +24,6 @@ from synth.replay.capture import captures, seat_depth, tip_placement
 from synth.replay.contact import first_contact, guided_motion
 from synth.replay.truth import HandErrors, link_error, nominal_world, sample_world
 from synth.units import CM, INCH
-
-ROOT = Path(__file__).parent.parent
 
 
 def Rz(rad: float) -> np.ndarray:
@@ -45,7 +43,7 @@ def Ry(rad: float) -> np.ndarray:
 
 @pytest.fixture(scope="module")
 def graph() -> AttributeGraph:
-    return AttributeGraph(load_task(ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"))
+    return AttributeGraph(load_task(SEED_TASK))
 
 
 @pytest.fixture(scope="module")

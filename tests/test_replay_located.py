@@ -31,6 +31,7 @@ import coal
 import numpy as np
 import pinocchio as pin
 import pytest
+from _paths import BOX_FIXTURE_TASK, TASKS
 
 import synth.errors.locate as locate
 import synth.replay.located as located
@@ -46,9 +47,6 @@ from synth.replay.run import replay_context, replay_graph, replay_program, run_w
 from synth.replay.truth import HandErrors, error_parameters, sample_world
 from synth.strategies.planner import plan_task
 
-ROOT = Path(__file__).parent.parent
-TASKS = ROOT / "fixtures" / "tasks"
-A1 = TASKS / "box_in_fixture.yaml"
 SEED_FIXTURE = TASKS / "seed_4_8_fixture.yaml"
 CM = 0.01
 A, B = 4.45 * CM, 3.80 * CM
@@ -109,8 +107,14 @@ def signed_distance(
 @pytest.mark.parametrize(
     ("task", "obj", "fixture", "touching", "edges"),
     [
-        (A1, "box2", "fixture2", {"xpos"}, {"xpos": (-1, -1)}),
-        (A1, "box3", "fixture3", {"xpos", "ypos", "xneg"}, {"xpos": (-1, -1), "ypos": (1, -1)}),
+        (BOX_FIXTURE_TASK, "box2", "fixture2", {"xpos"}, {"xpos": (-1, -1)}),
+        (
+            BOX_FIXTURE_TASK,
+            "box3",
+            "fixture3",
+            {"xpos", "ypos", "xneg"},
+            {"xpos": (-1, -1), "ypos": (1, -1)},
+        ),
         (SEED_FIXTURE, "box", "fixture", {"xpos"}, {"xpos": (-1, -1)}),
     ],
     ids=["A1-second", "A1-final", "seed_4_8_fixture"],
@@ -142,7 +146,7 @@ def test_drawn_poses_touch_the_fixture_where_the_contacts_say_by_coal(
 
 
 def test_drawn_poses_span_the_seeds_second_and_final_estimates() -> None:
-    graph = AttributeGraph(load_task(A1))
+    graph = AttributeGraph(load_task(BOX_FIXTURE_TASK))
     places = located_objects(graph)
     second = poses(places["box2"], 1, 300)
     xs = np.array([p.translation[0] for p in second])
@@ -194,7 +198,7 @@ def test_draws_are_reproducible_and_bounded(
     c = sample_world(graph, np.random.default_rng(8)).pose("box")
     assert a.isApprox(b, 0.0) and not a.isApprox(c, 1e-9)
     # a box that barely fits its cavity leaves a set too thin to draw from: a clear error
-    text = A1.read_text(encoding="utf-8").replace(
+    text = BOX_FIXTURE_TASK.read_text(encoding="utf-8").replace(
         "inside: [8.0 cm, 10.0 cm", "inside: [8.9001 cm, 7.6001 cm"
     )
     thin = tmp_path / "thin.yaml"

@@ -38,10 +38,10 @@ from __future__ import annotations
 
 import math
 import os
-from pathlib import Path
 
 import numpy as np
 import pytest
+from _paths import SEED_FIRST_CUT, SEED_PROGRAM, SEED_SEARCH, SEED_TASK
 
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
@@ -58,9 +58,6 @@ from synth.replay import (
 )
 from synth.units import CM, INCH
 
-ROOT = Path(__file__).parent.parent
-DATA = Path(__file__).parent / "data" / "al"
-SEED = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
 BOX_HALF = (4.45 * CM, 3.80 * CM)  # fixture: 8.90 × 7.60 cm
 WORKERS = max(2, min(4, os.cpu_count() or 2))
 """Processes for the 2 000-trial runs: each holds the arm and workcell (~0.2 GB), so a CI
@@ -70,7 +67,7 @@ BOX_TOP = 4.90 * CM
 
 @pytest.fixture(scope="module")
 def search_text() -> str:
-    return (DATA / "seed_4_8_search.al").read_text(encoding="utf-8")
+    return SEED_SEARCH.read_text(encoding="utf-8")
 
 
 def abort_line(text: str) -> int:
@@ -85,7 +82,7 @@ def abort_line(text: str) -> int:
 
 def check_search_failures(text: str, report_trials: list, seed: int) -> None:  # type: ignore[type-arg]
     """Every failed trial aborted because the pin passed beside the box (hand geometry)."""
-    context = replay_context(text, SEED)
+    context = replay_context(text, SEED_TASK)
     first_attempt = abort_line(text) - 19  # the first attempt's own ON ARRIVAL, L2736
     for index, run in enumerate(report_trials):
         if run.outcome == "success":
@@ -110,7 +107,7 @@ def check_search_failures(text: str, report_trials: list, seed: int) -> None:  #
 
 @pytest.mark.slow
 def test_search_listing_monte_carlo_300(search_text: str) -> None:
-    report = replay_program(search_text, SEED, trials=300, seed=0, workers=2)
+    report = replay_program(search_text, SEED_TASK, trials=300, seed=0, workers=2)
     mc = report.monte_carlo
     assert report.ok and mc.trials == 300
     assert mc.successes >= 279, mc.outcomes
@@ -122,7 +119,7 @@ def test_search_listing_monte_carlo_300(search_text: str) -> None:
     assert mc.time_mean == pytest.approx(times.mean())
     assert mc.time_p95 == pytest.approx(np.percentile(times, 95))
     # trials do not depend on the worker count: a few re-run in this process
-    context = replay_context(search_text, SEED)
+    context = replay_context(search_text, SEED_TASK)
     for index in (0, 7, 123):
         again = run_trial(context, 0, index)
         assert again == report.trials[index]
@@ -130,7 +127,7 @@ def test_search_listing_monte_carlo_300(search_text: str) -> None:
 
 @pytest.mark.slow
 def test_search_listing_monte_carlo_2000(search_text: str) -> None:
-    report = replay_program(search_text, SEED, trials=2000, seed=0, workers=WORKERS)
+    report = replay_program(search_text, SEED_TASK, trials=2000, seed=0, workers=WORKERS)
     mc = report.monte_carlo
     # measured 1948/2000 (module docstring)
     assert mc.successes >= 1880, mc.outcomes
@@ -146,7 +143,7 @@ def test_search_listing_monte_carlo_2000_normal(search_text: str) -> None:
     # need a box error near its bound, which a 3σ tolerance makes rare.
     # Binomial: for a true rate of 0.995, P(K < 1980) = 2e-4.
     report = replay_program(
-        search_text, SEED, trials=2000, seed=0, workers=WORKERS, distribution="normal"
+        search_text, SEED_TASK, trials=2000, seed=0, workers=WORKERS, distribution="normal"
     )
     mc = report.monte_carlo
     assert report.ok and mc.trials == 2000
@@ -161,7 +158,7 @@ def test_a_distribution_override_samples_every_block_from_it() -> None:
     # truncated at 3σ has 0.1 in·√(1 − 6φ(3)/(2Φ(3) − 1)) = 0.0986 in.
     from scipy.stats import truncnorm
 
-    spec = load_task(SEED)
+    spec = load_task(SEED_TASK)
     for name, expected in (
         ("uniform", 0.3 * INCH / math.sqrt(3)),
         ("normal", 0.1 * INCH * float(truncnorm(-3, 3).std())),
@@ -185,8 +182,8 @@ def test_synths_search_program_does_not_give_up_beside_the_box() -> None:
     # aborts beside the box, it succeeded in every one of 1000 trials (seed 0). Asserted:
     # ≥ 397 of 400 (scipy.stats.binom): a program as good as the listing (0.974) passes with
     # P = 0.007, one at 0.998 fails with P = 0.009.
-    text = (ROOT / "fixtures" / "golden" / "seed_4_8.al").read_text(encoding="utf-8")
-    report = replay_program(text, SEED, trials=400, seed=0, workers=2)
+    text = SEED_PROGRAM.read_text(encoding="utf-8")
+    report = replay_program(text, SEED_TASK, trials=400, seed=0, workers=2)
     mc = report.monte_carlo
     assert report.ok and mc.successes >= 397, mc.outcomes
 
@@ -206,8 +203,8 @@ def first_cut_model(samples: int = 200_000) -> float:
 
 
 def test_first_cut_program_fails_in_a_measurable_fraction() -> None:
-    text = (DATA / "seed_4_8_first_cut.al").read_text(encoding="utf-8")
-    report = replay_program(text, SEED, trials=120, seed=0, workers=2)
+    text = SEED_FIRST_CUT.read_text(encoding="utf-8")
+    report = replay_program(text, SEED_TASK, trials=120, seed=0, workers=2)
     mc = report.monte_carlo
     assert report.ok  # the believed world is fine
     failures = mc.trials - mc.successes

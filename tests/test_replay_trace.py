@@ -15,35 +15,35 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
-from _tasks import FIXTURES, synthesized
+from _paths import SEED_TASK
+from _tasks import synthesized
 
 from synth.cli import main
 from synth.replay.run import replay_context, replay_program
 from synth.replay.trace import SCHEMA, Trace, TraceRecorder, record_run
 
-TASK = FIXTURES / "seed_4_8.yaml"
 KEYWORDS = {"move": "MOVE", "open": "OPEN", "close": "CLOSE", "center": "CENTER"}
 
 
 @pytest.fixture(scope="module")
 def program() -> str:
-    return synthesized(TASK).program
+    return synthesized(SEED_TASK).program
 
 
 @pytest.fixture(scope="module")
 def nominal(program: str) -> Trace:
-    return record_run(replay_context(program, TASK), program="seed.al")
+    return record_run(replay_context(program, SEED_TASK), program="seed.al")
 
 
 def test_the_trace_runs_on_the_replays_clock(program: str, nominal: Trace) -> None:
-    report = replay_program(program, TASK, trials=3, seed=0)
+    report = replay_program(program, SEED_TASK, trials=3, seed=0)
     assert nominal.report == report.nominal
     times = np.array([s.t for s in nominal.samples])
     assert times[0] == 0.0 and np.all(np.diff(times) > 0)
     assert times[-1] == pytest.approx(report.nominal.time, abs=1e-12)
     assert np.max(np.diff(times)) <= nominal.dt + 1e-9
     # a trial's trace is that trial: same draw, same outcome and time
-    context = replay_context(program, TASK)
+    context = replay_context(program, SEED_TASK)
     for index in range(3):
         trace = record_run(context, trial=index, seed=0)
         assert trace.report.outcome == report.trials[index].outcome
@@ -66,7 +66,7 @@ def test_events_name_the_al_lines_of_their_statements(program: str, nominal: Tra
 
 
 def test_poses_follow_the_arm_and_the_pin(nominal: Trace) -> None:
-    context = replay_context(synthesized(TASK).program, TASK)
+    context = replay_context(synthesized(SEED_TASK).program, SEED_TASK)
     arm = context.arm
     # no hand error in the nominal run: hand = FK(q), up to the grasp's re-registration of the
     # hand on the pin (CENTER: the reading becomes the centred pose, q solved to within the IK)
@@ -90,7 +90,7 @@ def test_trace_json_and_cli(tmp_path: Path, program: str) -> None:
     al = tmp_path / "seed.al"
     al.write_text(program, encoding="utf-8")
     out = tmp_path / "trace.json"
-    args = ["replay", str(al), "--task", str(TASK), "--trials", "0", "--workers", "1"]
+    args = ["replay", str(al), "--task", str(SEED_TASK), "--trials", "0", "--workers", "1"]
     assert main([*args, "--trace", str(out)]) == 0
     doc = json.loads(out.read_text())
     assert doc["schema"] == SCHEMA and doc["trial"] is None

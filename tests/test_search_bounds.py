@@ -2,9 +2,8 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import pytest
+from _paths import SEED_TASK
 
 from synth.exceptions import NoStrategyError, SpecError
 from synth.models.loader import parse_task
@@ -17,8 +16,6 @@ from synth.strategies.search import (
     search_size_problem,
 )
 from synth.units import CM
-
-SEED_TASK = Path(__file__).resolve().parent.parent / "fixtures" / "tasks" / "seed_4_8.yaml"
 
 
 def test_a_tiny_dr_ok_is_refused_without_summing_its_rings() -> None:

@@ -11,11 +11,11 @@ from __future__ import annotations
 
 import json
 import math
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
+from _paths import GOLDEN, SEED_TASK, TASKS
 
 from synth.cli import main
 from synth.errors.seat import after_seat, seat_error
@@ -28,9 +28,6 @@ from synth.replay.run import machine_for, replay_context, run_machine
 from synth.replay.truth import HandErrors, sample_world
 from synth.strategies.sequence import plan_sequence
 
-ROOT = Path(__file__).resolve().parents[1]
-TASKS = ROOT / "fixtures" / "tasks"
-GOLDEN = ROOT / "fixtures" / "golden"
 TWO = TASKS / "seed_box_two_pins.yaml"
 PLATE = TASKS / "plate_two_pins_shim.yaml"
 NOMINAL = SynthesisOptions(proof=ProofOptions(trials=0))
@@ -59,8 +56,8 @@ def test_insertions_forms_and_their_errors():
 
 
 def test_a_one_step_list_is_the_single_insertion():
-    single = synthesize(TASKS / "seed_4_8.yaml", NOMINAL)
-    text = (TASKS / "seed_4_8.yaml").read_text(encoding="utf-8")
+    single = synthesize(SEED_TASK, NOMINAL)
+    text = SEED_TASK.read_text(encoding="utf-8")
     listed = text.replace("insertion:\n  pin:", "insertions:\n  - pin:").replace(
         "\n  hole: BH1", "\n    hole: BH1"
     )

@@ -18,13 +18,14 @@ from pathlib import Path
 
 import pytest
 import yaml
-from _server_support import SEED, YAML, client_for, done, failed, overridden
+from _paths import SEED_TASK
+from _server_support import YAML, client_for, done, failed, overridden
 from fastapi.testclient import TestClient
 
 from server.db import NewPlan
 from server.settings import Settings
 
-SEED_TEXT = SEED.read_text()
+SEED_TEXT = SEED_TASK.read_text()
 
 
 @pytest.fixture(scope="module")
@@ -257,18 +258,29 @@ def test_wrong_method_is_405(client: TestClient) -> None:
 
 
 @pytest.mark.parametrize(
-    "body",
+    ("body", "loc", "why"),
     [
-        {},
-        {"program": "BEGIN END"},
-        {"spec": {"name": "t"}, "plan_id": "0" * 32, "program": "x"},
-        {"plan_id": "0" * 32, "seed": -1},
-        {"plan_id": "0" * 32, "extra": 1},
+        # ReplayIn (server/schemas.py): a program needs its spec, a spec excludes a plan_id,
+        # the seed is ge=0, and unknown keys are refused.
+        ({}, ["body"], "give 'program' and 'spec', or 'plan_id'"),
+        ({"program": "BEGIN END"}, ["body"], "give 'program' and 'spec', or 'plan_id'"),
+        (
+            {"spec": {"name": "t"}, "plan_id": "0" * 32, "program": "x"},
+            ["body"],
+            "give either 'spec' or 'plan_id', not both",
+        ),
+        ({"plan_id": "0" * 32, "seed": -1}, ["body", "seed"], "greater than or equal to 0"),
+        ({"plan_id": "0" * 32, "extra": 1}, ["body", "extra"], "Extra inputs are not permitted"),
     ],
+    ids=["empty", "program-alone", "spec-and-plan", "negative-seed", "unknown-key"],
 )
-def test_malformed_replay_requests_are_422(client: TestClient, body: dict[str, object]) -> None:
+def test_malformed_replay_requests_are_422(
+    client: TestClient, body: dict[str, object], loc: list[str], why: str
+) -> None:
     answer = problem(client.post("/v1/replays", json=body), 422)
-    assert answer["errors"]
+    errors = answer["errors"]
+    assert isinstance(errors, list) and len(errors) == 1, errors  # one fault per body
+    assert errors[0]["loc"] == loc and why in errors[0]["msg"], errors
 
 
 # -- listing --------------------------------------------------------------------------------------
@@ -463,7 +475,7 @@ def test_plan_document_is_synth_plan_json_plus_the_servers_keys(
     from synth.cli import main
 
     # validate=false proves by the nominal replay alone, as --proof-trials 0 does.
-    assert main(["plan", str(SEED), "--json", "--proof-trials", "0"]) == 0
+    assert main(["plan", str(SEED_TASK), "--json", "--proof-trials", "0"]) == 0
     cli = json.loads(capsys.readouterr().out)
     served = done(client, client.post("/v1/plans?validate=false", content=SEED_TEXT, headers=YAML))
     assert served["proof"]["passed"] and served["proof"]["decided_by"] == "nominal-only"

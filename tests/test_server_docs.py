@@ -13,7 +13,8 @@ from html.parser import HTMLParser
 from pathlib import Path
 
 import pytest
-from _server_support import ROOT, client_for
+from _paths import ROOT
+from _server_support import client_for
 from fastapi.testclient import TestClient
 
 from server.settings import Settings

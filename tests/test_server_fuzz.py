@@ -13,14 +13,15 @@ from urllib.parse import quote
 
 import pytest
 import yaml
-from _server_support import SEED, client_for
+from _paths import SEED_TASK
+from _server_support import client_for
 from fastapi.testclient import TestClient
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from server.settings import Settings
 
-SEED_DATA: dict[str, Any] = yaml.safe_load(SEED.read_text())
+SEED_DATA: dict[str, Any] = yaml.safe_load(SEED_TASK.read_text())
 FUZZ = settings(
     max_examples=30,
     deadline=None,

@@ -14,12 +14,13 @@ from typing import Any
 
 import pytest
 import yaml
-from _server_support import FINAL, ROOT, SEED, YAML, client_for, done, finished, overridden
+from _paths import ROOT, SEED_TASK
+from _server_support import FINAL, YAML, client_for, done, finished, overridden
 from fastapi.testclient import TestClient
 
 from server.settings import Settings
 
-SEED_TEXT = SEED.read_text()
+SEED_TEXT = SEED_TASK.read_text()
 GOLDEN = (ROOT / "fixtures" / "golden" / "seed_4_8.al").read_text()
 LONG = {"program": GOLDEN, "spec": SEED_TEXT, "trials": 200}
 QUICK = {"program": GOLDEN, "spec": SEED_TEXT, "trials": 0}

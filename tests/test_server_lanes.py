@@ -9,7 +9,8 @@ import time
 from pathlib import Path
 
 import pytest
-from _server_support import SEED, YAML, client_for, finished
+from _paths import SEED_TASK
+from _server_support import YAML, client_for, finished
 from fastapi.testclient import TestClient
 
 from server.db import NewJob, PlanStore, StoredJob
@@ -19,7 +20,7 @@ from server.lanes import Lanes
 from server.settings import Settings
 from server.workers import WorkerPool
 
-SEED_TEXT = SEED.read_text()
+SEED_TEXT = SEED_TASK.read_text()
 
 
 def test_one_client_cannot_take_every_slot() -> None:

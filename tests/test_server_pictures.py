@@ -13,7 +13,8 @@ import re
 from collections.abc import Iterator
 
 import pytest
-from _server_support import SEED, YAML, client_for, done
+from _paths import SEED_TASK
+from _server_support import YAML, client_for, done
 from _svg import SvgFigure
 from fastapi.testclient import TestClient
 
@@ -29,7 +30,7 @@ def client(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TestClient]:
 
 @pytest.fixture(scope="module")
 def plan(client: TestClient) -> dict:
-    answer = client.post("/v1/plans?trials=2", content=SEED.read_text(), headers=YAML)
+    answer = client.post("/v1/plans?trials=2", content=SEED_TASK.read_text(), headers=YAML)
     return done(client, answer)
 
 

@@ -16,12 +16,13 @@ from contextlib import contextmanager
 from pathlib import Path
 
 import httpx
-from _server_support import ROOT, SEED, YAML, done, finished
+from _paths import ROOT, SEED_TASK
+from _server_support import YAML, done, finished
 
 STARTUP = 60.0  # [s] bound on the server's start (imports, worker warm-up)
 GOLDEN = (ROOT / "fixtures" / "golden" / "seed_4_8.al").read_text()
-LONG = {"program": GOLDEN, "spec": SEED.read_text(), "trials": 200}  # about 12 s
-QUICK = {"program": GOLDEN, "spec": SEED.read_text(), "trials": 0}
+LONG = {"program": GOLDEN, "spec": SEED_TASK.read_text(), "trials": 200}  # about 12 s
+QUICK = {"program": GOLDEN, "spec": SEED_TASK.read_text(), "trials": 0}
 
 
 class Server:
@@ -109,7 +110,9 @@ def test_serve_on_loopback_token_kill_9_and_restart(tmp_path: Path) -> None:
         server.wait_ready(client)
         bad = client.post("/v1/plans", content=b"name: t\nframes: []\n", headers=auth)
         assert bad.status_code == 422 and bad.json()["path"] == "frames"
-        submitted = client.post("/v1/plans?validate=false", content=SEED.read_bytes(), headers=auth)
+        submitted = client.post(
+            "/v1/plans?validate=false", content=SEED_TASK.read_bytes(), headers=auth
+        )
         plan = done(client, submitted)
         location = plan["links"]["self"]
         server.stop(signal.SIGKILL)  # no shutdown, no checkpoint: only what was committed

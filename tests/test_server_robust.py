@@ -12,7 +12,8 @@ from pathlib import Path
 
 import httpx
 import pytest
-from _server_support import SEED, YAML, client_for, failed, overridden
+from _paths import SEED_TASK
+from _server_support import YAML, client_for, failed, overridden
 from fastapi.testclient import TestClient
 
 from server.main import create_app
@@ -80,7 +81,7 @@ def test_an_in_directory_urdf_without_joints_fails_its_job_with_422(
     models = tmp_path / "models"
     models.mkdir()
     (models / "plank.urdf").write_text(NO_JOINTS_URDF)
-    spec = SEED.read_text().replace(
+    spec = SEED_TASK.read_text().replace(
         "    model: stanford", f"    urdf: {json.dumps('plank.urdf')}\n    tool_frame: base", 1
     )
     with overridden(client.app, model_dirs=(models,)):  # type: ignore[arg-type]
@@ -110,3 +111,22 @@ def test_an_unhandled_error_is_answered_by_the_app_not_raised_to_the_server(
     body = problem(answer, 500)
     assert body["type"] == "urn:synth:problem:internal"
     assert "internal detail" not in answer.text
+
+
+def test_a_replay_of_an_error_block_too_thin_to_sample_fails_its_job_with_422(
+    client: TestClient,
+) -> None:
+    # box.x = box.y exactly: the loader's LP finds it feasible, the replay's rejection sampler
+    # cannot hit a line in a rectangle (synth.errors.parameters.SAMPLE_BUDGET); it used to draw
+    # for ever, holding the worker until the time budget killed it.
+    spec = SEED_TASK.read_text(encoding="utf-8").replace(
+        "      rz: 5 deg\n",
+        "      rz: 5 deg\n      constraints:\n"
+        "        - {terms: {x: 1, y: -1}, min: 0 cm, max: 0 cm}\n",
+        1,
+    )
+    answer = client.post("/v1/replays", json={"program": "BEGIN END", "spec": spec, "trials": 1})
+    body = failed(client, answer, 422)
+    assert body["title"] == "Invalid task specification"
+    assert body["path"] == "uncertainty of box"
+    assert str(body["detail"]).startswith("uncertainty of box: 0 of 100032 draws")

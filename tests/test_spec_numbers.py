@@ -14,17 +14,15 @@ from typing import Any
 
 import pytest
 import yaml
+from _paths import ROOT, SEED_TASK
 
 from synth.exceptions import SpecError, UnitError
 from synth.models.loader import validate_task
 from synth.units import DEG, INCH, MAX_MAGNITUDE, RATE_RANGE, parse_quantity, rate_si
 
-ROOT = Path(__file__).resolve().parents[1]
-SEED = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
-
 
 def seed() -> dict[str, Any]:
-    data: dict[str, Any] = yaml.safe_load(SEED.read_text(encoding="utf-8"))
+    data: dict[str, Any] = yaml.safe_load(SEED_TASK.read_text(encoding="utf-8"))
     return copy.deepcopy(data)
 
 

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _paths import DATA_TASKS
 from test_al_interpreter import H, Rx, ScriptedMachine, run
 
 from synth.al.machine import ForceMonitor
@@ -21,7 +22,7 @@ from synth.models.insertion import derive
 from synth.models.loader import load_task
 from synth.strategies.context import plan_context
 
-TASK = Path(__file__).resolve().parent / "data" / "tasks" / "turned_over.yaml"
+TASK = DATA_TASKS / "turned_over.yaml"
 
 
 def test_head_first_lead_uses_the_shaft_radius_not_the_tip_radius() -> None:

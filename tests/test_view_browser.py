@@ -18,7 +18,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from _tasks import FIXTURES, synthesized
+from _paths import SEED_TASK
+from _tasks import synthesized
 from PIL import Image
 
 from synth.cli import main
@@ -26,7 +27,6 @@ from synth.pictures.view import CANVAS, Camera, project, view_html, view_scene
 from synth.replay.run import replay_context
 from synth.replay.trace import Trace, record_run
 
-TASK = FIXTURES / "seed_4_8.yaml"
 WINDOW = (CANVAS[0] + 360, CANVAS[1])
 
 
@@ -58,8 +58,8 @@ def chromium() -> str:
 
 @pytest.fixture(scope="module")
 def page(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict, Trace]:
-    program = synthesized(TASK).program
-    context = replay_context(program, TASK)
+    program = synthesized(SEED_TASK).program
+    context = replay_context(program, SEED_TASK)
     trace = record_run(context, program="seed.al")
     scene = view_scene(context, trace, program)
     path = tmp_path_factory.mktemp("view") / "view.html"
@@ -152,8 +152,8 @@ def test_the_page_is_self_contained(page) -> None:
 
 def test_cli_writes_the_view(tmp_path: Path) -> None:
     al = tmp_path / "seed.al"
-    al.write_text(synthesized(TASK).program, encoding="utf-8")
+    al.write_text(synthesized(SEED_TASK).program, encoding="utf-8")
     out = tmp_path / "v" / "view.html"
-    assert main(["view", str(TASK), str(al), "-o", str(out)]) == 0
+    assert main(["view", str(SEED_TASK), str(al), "-o", str(out)]) == 0
     assert "synth view" in out.read_text(encoding="utf-8")
-    assert main(["view", str(TASK), str(tmp_path / "missing.al"), "-o", str(out)]) == 2
+    assert main(["view", str(SEED_TASK), str(tmp_path / "missing.al"), "-o", str(out)]) == 2

@@ -7,13 +7,11 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 import pytest
-from _tasks import FIXTURES
+from _paths import SEED_TASK
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from synth.models.world import Fact, MatchError, World
-
-SEED = FIXTURES / "seed_4_8.yaml"
 
 
 @dataclass(frozen=True)
@@ -137,7 +135,7 @@ def test_the_planners_root_world_states_the_task() -> None:
     from synth.strategies.hypotheses import At as PinAt
     from synth.strategies.hypotheses import Holding, InHole
 
-    ctx = plan_context(load_task(SEED))
+    ctx = plan_context(load_task(SEED_TASK))
     world = ctx.base_world
     # The task starts with the pin in its start hole (the rack, at depth d_i) and the hand empty.
     assert world.get(Holding, ctx.hand_al).what == "nothing"

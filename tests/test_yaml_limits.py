@@ -9,17 +9,14 @@ from pathlib import Path
 
 import pytest
 import yaml
+from _paths import DATA, SEED_TASK, TASKS
 
 from server.service import YAML_LIMITS, parse_spec
 from synth.exceptions import SpecError
 from synth.models.loader import load_task, parse_task
 from synth.models.yamlread import DEFAULT_LIMITS, WITH_LIBYAML, YamlLimits, read_yaml
 
-ROOT = Path(__file__).resolve().parent.parent
-SEED = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
-TASK_FILES = sorted((ROOT / "fixtures" / "tasks").rglob("*.yaml")) + sorted(
-    (ROOT / "tests" / "data").glob("*.yaml")
-)
+TASK_FILES = sorted(TASKS.rglob("*.yaml")) + sorted(DATA.glob("*.yaml"))
 
 
 def billion_laughs(levels: int = 9) -> str:
@@ -67,7 +64,20 @@ def test_bombs_are_refused_naming_the_problem(name: str) -> None:
     text, fragment = BOMBS[name]
     with pytest.raises(SpecError, match=fragment) as caught:
         parse_task(text)
-    assert caught.value.line is not None
+    assert caught.value.line == BOMB_LINES[name]
+
+
+BOMB_LINES = {
+    # Levels a, b, c, … expand to 10, 91, 820, 7381, 66430, 597871 nodes (n_k = 1 + 9·n_{k−1},
+    # test_expansion_is_counted_through_aliases): with the root and its keys, 74 738 nodes
+    # after line 5 (e) and over the 100 000 limit at line 6 (f).
+    "billion laughs": 6,
+    "recursive alias": 2,
+    "recursive mapping alias": 2,
+    "deep flow nesting": 2,  # all 1000 brackets are on the frames line
+    "deep block nesting": 33,  # line k opens the k-th nested mapping; 32 is the limit
+    "huge list": 3 + 10_000,  # items start on line 3; item 10 001 is one too many
+}
 
 
 def test_billion_laughs_is_refused_in_bounded_memory() -> None:
@@ -105,7 +115,7 @@ def test_the_service_parses_with_the_same_loader() -> None:
         parse_spec(HUGE_LIST.encode())
     with pytest.raises(SpecError, match="aliases"):
         parse_spec(billion_laughs().encode())
-    assert parse_spec(SEED.read_bytes()).name == load_task(SEED).name
+    assert parse_spec(SEED_TASK.read_bytes()).name == load_task(SEED_TASK).name
 
 
 def test_mapping_entries_are_bounded_too() -> None:

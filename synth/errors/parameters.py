@@ -13,9 +13,38 @@ import itertools
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.stats import truncnorm
 
+from synth.exceptions import SpecError
 from synth.models.spec import PARAMS, Uncertainty
+
+SAMPLE_BUDGET = 100_000
+"""Draws within the bounds after which :meth:`ParameterSpace.sample` judges its acceptance:
+at the :data:`MIN_ACCEPTANCE` rate 10⁵ draws accept 10 on average, so a set that accepts
+fewer than 10 of them is declared too thin to sample rather than drawn from for ever."""
+MIN_ACCEPTANCE = 1e-4
+"""Acceptance rate (feasible draws / draws) below which sampling gives up: the coupled
+constraints leave an empty set, or one so thin (an equality, a sliver) that rejection sampling
+would take 10⁴ draws per sample or more."""
+
+
+class SamplingError(SpecError, ValueError):
+    """The coupled constraints of the blocks ``path`` names reject (nearly) every draw.
+
+    A :class:`~synth.exceptions.SpecError`, so the CLI exits 2 with its one-line message and
+    the server answers 422, as for any other unusable task; a :class:`ValueError` for callers
+    of :class:`ParameterSpace` outside the task layer. ``drawn`` and ``accepted`` are the
+    draws made and kept when sampling gave up.
+    """
+
+    def __init__(self, path: str, message: str, drawn: int, accepted: int) -> None:
+        super().__init__(path, message)
+        self.drawn = drawn
+        self.accepted = accepted
+
+    def __reduce__(self) -> tuple[type[SamplingError], tuple[str, str, int, int]]:
+        # Raised in a replay worker process, it must survive the trip back by pickle
+        # (SpecError's own (path, message) constructor does not match its args).
+        return type(self), (self.path, self.detail, self.drawn, self.accepted)
 
 
 @dataclass(frozen=True, eq=False)
@@ -150,13 +179,24 @@ class ParameterSpace:
 
         Normal blocks use σ = tolerance/3 truncated at the bounds (seed L7242), the tolerance
         being the larger half-width of each parameter.
+
+        Bounded: once :data:`SAMPLE_BUDGET` (10⁵) draws are made and fewer than
+        :data:`MIN_ACCEPTANCE` (10⁻⁴) of them satisfy the coupled constraints, it raises
+        :class:`SamplingError` naming the blocks and the rows that reject the draws, with the
+        acceptance observed. The loader's LP (``synth.models.loader``) refuses an empty block,
+        but an equality (``min == max``), a sliver, or rows added with :meth:`constrain` can
+        still leave a set that rejection sampling would never hit. Draws are made in the same
+        rounds as without the bound, so a feasible space gives the same samples as before.
         """
         out = np.empty((0, self.dim))
+        drawn = 0
         while out.shape[0] < n:
             want = max(2 * (n - out.shape[0]), 64)
             parts = []
             for b in self.blocks:
                 if b.distribution == "normal":
+                    from scipy.stats import truncnorm  # slow to import; most tasks are uniform
+
                     sigma = np.maximum(np.maximum(np.abs(b.lo), np.abs(b.hi)) / 3.0, 1e-300)
                     parts.append(
                         truncnorm.rvs(
@@ -171,7 +211,44 @@ class ParameterSpace:
                     parts.append(rng.uniform(b.lo, b.hi, size=(want, b.size)))
             v = np.hstack(parts) if parts else np.zeros((want, 0))
             out = np.vstack([out, v[self.feasible(v)]])
+            drawn += want
+            short = out.shape[0] < n
+            if short and drawn >= SAMPLE_BUDGET and out.shape[0] < MIN_ACCEPTANCE * drawn:
+                raise self._too_thin(v, drawn, out.shape[0])
         return out[:n]
+
+    def _too_thin(self, v: np.ndarray, drawn: int, accepted: int) -> SamplingError:
+        """The error of :meth:`sample`: the rows rejecting most of the last draws ``v``."""
+        a, b = self.constraint_matrix()
+        rejects = (v @ a.T > b + 1e-12).mean(axis=0) if a.shape[0] else np.zeros(0)
+        order = [int(i) for i in np.argsort(-rejects, kind="stable") if rejects[i] > 0][:3]
+        labels = self.labels
+        rows = []
+        owners: list[str] = []
+        for i in order:
+            used = [k for k in range(self.dim) if a[i, k] != 0.0]
+            rows.append(
+                f"{_linear(a[i, used], [labels[k] for k in used])} ≤ {b[i] + 0.0:g} "
+                f"(rejects {100 * rejects[i]:.0f}% of the last draws)"
+            )
+            for k in used:
+                owner = labels[k].rsplit(".", 1)[0]
+                if owner not in owners:
+                    owners.append(owner)
+        if not owners:  # no row rejected the last draws: name every constrained block
+            owners = [blk.owner for blk in self.blocks if blk.a_ub.shape[0]] or [
+                blk.owner for blk in self.blocks
+            ]
+        rate = accepted / drawn
+        return SamplingError(
+            "uncertainty of " + ", ".join(owners),
+            f"{accepted} of {drawn} draws within the bounds satisfy the coupled constraints "
+            f"(acceptance {rate:.1e}, below {MIN_ACCEPTANCE:.0e}): the set they leave is empty "
+            "or too thin for the replay to sample"
+            + (f"; rejecting most: {'; '.join(rows)} [m, rad]" if rows else ""),
+            drawn,
+            accepted,
+        )
 
     def corners(self) -> np.ndarray:
         """Every vertex of the bounding box that satisfies the coupled constraints.
@@ -185,3 +262,13 @@ class ParameterSpace:
         grid = np.array(list(itertools.product((0, 1), repeat=self.dim)), dtype=float)
         v = lo + grid * (hi - lo)
         return v[self.feasible(v)]
+
+
+def _linear(coefficients: np.ndarray, names: list[str]) -> str:
+    """``BOX.x − 2·BOX.rz``: a row of ``A`` as the sum it stands for."""
+    out = ""
+    for c, name in zip(coefficients, names, strict=True):
+        sign = "−" if c < 0 else "+"
+        term = name if abs(c) == 1.0 else f"{abs(c):g}·{name}"
+        out += (f" {sign} " if out else ("−" if c < 0 else "")) + term
+    return out

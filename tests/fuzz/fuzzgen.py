@@ -17,14 +17,13 @@ from pathlib import Path
 from typing import Any
 
 import yaml
+from _paths import DATA_TASKS, TASKS
+from _paths import GOLDEN as GOLDEN_DIR
 from hypothesis import strategies as st
 
-ROOT = Path(__file__).resolve().parents[2]
-TASK_FILES = tuple(
-    sorted((ROOT / "fixtures" / "tasks").glob("*.yaml"))
-    + sorted((ROOT / "tests" / "data" / "tasks").glob("*.yaml"))
-)
-GOLDEN = tuple(sorted((ROOT / "fixtures" / "golden").glob("*.al")))
+TASK_FILES = tuple(sorted(TASKS.glob("*.yaml")) + sorted(DATA_TASKS.glob("*.yaml")))
+GOLDEN = tuple(sorted(GOLDEN_DIR.glob("*.al")))
+"""The golden programs the AL mutations start from."""
 
 EXTREME_QUANTITIES = (
     "1e300 lightyear",
@@ -262,7 +261,7 @@ class ALCase:
 
 
 def _golden_task(program: Path) -> Path:
-    return ROOT / "fixtures" / "tasks" / f"{program.stem}.yaml"
+    return TASKS / f"{program.stem}.yaml"
 
 
 _PROGRAMS = {path: path.read_text() for path in GOLDEN}

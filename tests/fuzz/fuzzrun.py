@@ -47,6 +47,8 @@ from typing import Any
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # forked children must not inherit BLAS threads
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
+# Run as a script: fuzzgen sits beside this file, and _paths (the project's paths) one up.
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import fuzzgen

@@ -3,6 +3,7 @@ and a small fixed sample of every surface (task specs, AL programs, the API) com
 
 from __future__ import annotations
 
+import json
 import sys
 import time
 from pathlib import Path
@@ -11,6 +12,7 @@ import fuzzgen
 import fuzzrun
 import pytest
 import yaml
+from _paths import GOLDEN, TASKS
 
 from synth.al.parser import parse_program
 
@@ -89,8 +91,14 @@ def test_deep_nests_reach_the_yaml_text_but_never_the_python_tree() -> None:
 
 
 def test_the_unmutated_golden_programs_parse() -> None:
-    for path in fuzzgen.GOLDEN:  # the AL generator starts from programs that are valid
-        parse_program(path.read_text())
+    # The AL generator starts from every golden program (the manifest regen_golden.py
+    # writes), each valid and replayed against the fixture task of its name.
+    manifest = json.loads((GOLDEN / "manifest.json").read_text(encoding="utf-8"))
+    assert [path.stem for path in fuzzgen.GOLDEN] == sorted(manifest["tasks"])
+    for path in fuzzgen.GOLDEN:
+        assert parse_program(path.read_text()).body, path
+        assert fuzzgen._golden_task(path) == TASKS / f"{path.stem}.yaml"
+        assert fuzzgen._golden_task(path).is_file()
 
 
 @pytest.mark.parametrize("surface", fuzzrun.SURFACES)
