@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
+from _paths import DATA_AL, SEED_TAP_TASK, SEED_TASK
 from _tasks import with_base
 
 from synth.al.parser import parse_program
@@ -35,12 +36,6 @@ from synth.replay import (
 )
 from synth.replay.trace import Trace, record_run
 from synth.units import CM, INCH
-
-ROOT = Path(__file__).parent.parent
-DATA = Path(__file__).parent / "data" / "al"
-TASKS = ROOT / "fixtures" / "tasks"
-SEED = TASKS / "seed_4_8.yaml"
-TAP = TASKS / "seed_4_8_tap.yaml"
 
 
 def axis_angle(axis: tuple[float, float, float], rad: float) -> np.ndarray:
@@ -63,8 +58,8 @@ OLD_BASE = (20.0, 80.0, 225.0)
 
 
 def test_search_listing_seats_the_pin_in_the_nominal_world() -> None:
-    path = DATA / "seed_4_8_search.al"
-    context = replay_context(path.read_text(encoding="utf-8"), SEED, filename=str(path))
+    path = DATA_AL / "seed_4_8_search.al"
+    context = replay_context(path.read_text(encoding="utf-8"), SEED_TASK, filename=str(path))
     machine = machine_for(context, nominal_world(context.graph), HandErrors.none())
     report, interpreter = run_machine(context, machine)
     assert report.outcome == "success", report.message
@@ -105,8 +100,8 @@ def least_time(velocity: np.ndarray, trace: Trace) -> float:
 def test_no_joint_moves_faster_than_its_velocity_limit() -> None:
     # Sampled every 20 ms along the replay's own timeline: the limits alone, not the timing rule
     # that produced the motions, bound each joint's displacement between two samples.
-    path = DATA / "seed_4_8_search.al"
-    context = replay_context(path.read_text(encoding="utf-8"), SEED, filename=str(path))
+    path = DATA_AL / "seed_4_8_search.al"
+    context = replay_context(path.read_text(encoding="utf-8"), SEED_TASK, filename=str(path))
     trace = record_run(context, program=path.name)
     q = np.array([sample.q for sample in trace.samples])
     t = np.array([sample.t for sample in trace.samples])
@@ -115,8 +110,8 @@ def test_no_joint_moves_faster_than_its_velocity_limit() -> None:
 
 
 def test_tap_listing_seats_the_pin_in_the_nominal_world() -> None:
-    path = DATA / "seed_4_8_tap.al"
-    context = replay_context(path.read_text(encoding="utf-8"), TAP, filename=str(path))
+    path = DATA_AL / "seed_4_8_tap.al"
+    context = replay_context(path.read_text(encoding="utf-8"), SEED_TAP_TASK, filename=str(path))
     machine = machine_for(context, nominal_world(context.graph), HandErrors.none())
     report, interpreter = run_machine(context, machine)
     assert report.outcome == "success", report.message
@@ -149,7 +144,7 @@ def tap_via_point_boom_extension(x_cm: float, y_cm: float, yaw_deg: float) -> fl
 
 def test_tap_listing_via_point_is_within_the_boom_travel_at_the_fixture_base() -> None:
     # The fixture stands the arm where this test's hand computation puts it
-    manipulator = load_task(TAP).manipulator
+    manipulator = load_task(SEED_TAP_TASK).manipulator
     assert manipulator is not None and manipulator.arm.base is not None
     x, y, yaw = FIXTURE_BASE
     expected = pin.SE3(axis_angle((0, 0, 1), math.radians(yaw)), np.array([x, y, 0.0]) * CM)
@@ -158,8 +153,8 @@ def test_tap_listing_via_point_is_within_the_boom_travel_at_the_fixture_base() -
     # 24.93 cm: 9.7 cm clear of the 6 in (15.24 cm) stop, far below the 35 in one
     s3 = tap_via_point_boom_extension(*FIXTURE_BASE)
     assert 6 * INCH + 9 * CM < s3 < 35 * INCH
-    text = (DATA / "seed_4_8_tap.al").read_text(encoding="utf-8")
-    report = replay_program(text, TAP)
+    text = (DATA_AL / "seed_4_8_tap.al").read_text(encoding="utf-8")
+    report = replay_program(text, SEED_TAP_TASK)
     assert report.nominal.outcome == "success", report.nominal.message
 
 
@@ -168,8 +163,8 @@ def test_tap_listing_at_the_old_base_reaches_past_the_boom_stop() -> None:
     # unreachable at its line, the grasp approach.
     s3 = tap_via_point_boom_extension(*OLD_BASE)
     assert math.isclose(s3, 14.94 * CM, abs_tol=0.005 * CM) and s3 < 6 * INCH
-    text = (DATA / "seed_4_8_tap.al").read_text(encoding="utf-8")
-    report = replay_program(text, with_base(load_task(TAP), *OLD_BASE))
+    text = (DATA_AL / "seed_4_8_tap.al").read_text(encoding="utf-8")
+    report = replay_program(text, with_base(load_task(SEED_TAP_TASK), *OLD_BASE))
     assert report.nominal.outcome == "violation"
     (violation,) = report.nominal.violations
     line = line_of(text, "MOVE BMANIP TO PIN1*TRANS(ROTN(VECTOR(.679,.679,.281),149*DEG)")
@@ -178,8 +173,8 @@ def test_tap_listing_at_the_old_base_reaches_past_the_boom_stop() -> None:
 
 
 def test_first_cut_program_seats_the_pin_in_the_nominal_world() -> None:
-    text = (DATA / "seed_4_8_first_cut.al").read_text(encoding="utf-8")
-    report = replay_program(text, SEED)
+    text = (DATA_AL / "seed_4_8_first_cut.al").read_text(encoding="utf-8")
+    report = replay_program(text, SEED_TASK)
     assert report.nominal.outcome == "success", report.nominal.message
 
 
@@ -195,7 +190,7 @@ def test_a_target_out_of_the_workspace_is_unreachable_at_its_line() -> None:
     # 3 m above the park frame: farther from the shoulder than the boom (35 in) and the wrist
     # (S6 = 26.3 cm) reach together
     text = "OPEN BHAND TO 2*CM;\n{ reach up }\nMOVE BMANIP TO BPARK + VECTOR(0,0,300)*CM;\n"
-    report = replay_program(text, SEED)
+    report = replay_program(text, SEED_TASK)
     assert report.nominal.outcome == "violation" and not report.ok
     (violation,) = report.nominal.violations
     assert violation.kind == "unreachable" and violation.line == 3
@@ -206,7 +201,7 @@ def test_a_hand_turned_back_at_the_arm_needs_theta5_beyond_its_limit() -> None:
     # At BPARK with the approach vector pointing up: the boom is about level there, so the
     # hand's z makes more than 110° with it (θ5 ∈ [−110°, 110°], seed L963)
     text = "MOVE BMANIP TO BPARK*TRANS(ROT(YHAT,180*DEG),NILVECT);\n"
-    report = replay_program(text, SEED)
+    report = replay_program(text, SEED_TASK)
     (violation,) = report.nominal.violations
     assert violation.kind == "joint_limit" and violation.line == 1
     assert "theta5" in violation.detail
@@ -216,7 +211,7 @@ def test_a_motion_into_the_table_is_a_collision_at_its_line() -> None:
     # BPARK is 10.7 cm above the table, hand pointing down; 12 cm lower puts the fingertips
     # (one pad radius, 0.635 cm, past the hand origin) below the table top
     text = "OPEN BHAND TO 2*CM;\nMOVE BMANIP TO BPARK - VECTOR(0,0,12)*CM;\nOPEN BHAND TO 1*CM;\n"
-    report = replay_program(text, SEED)
+    report = replay_program(text, SEED_TASK)
     (violation,) = report.nominal.violations
     assert violation.kind == "collision" and violation.line == 2
     assert "table" in violation.detail and "finger" in violation.detail
@@ -231,7 +226,7 @@ def test_a_guarded_motion_onto_the_table_stops_without_violation() -> None:
         "  ON FORCE(ZHAT) > 8*OZ DO STOP;\n"
         "Z = ZHAT . DISPL(BMANIP);\n"
     )
-    context = replay_context(text, SEED)
+    context = replay_context(text, SEED_TASK)
     machine = machine_for(context, nominal_world(context.graph), HandErrors.none())
     report, interpreter = run_machine(context, machine)
     # no violation (the task's pin stays in its rack, so the goal is not met)…
@@ -243,14 +238,14 @@ def test_a_guarded_motion_onto_the_table_stops_without_violation() -> None:
 
 
 def test_unknown_frame_is_an_error_with_its_line() -> None:
-    report = replay_program("OPEN BHAND TO 2*CM;\nMOVE BMANIP TO NOSUCH;\n", SEED)
+    report = replay_program("OPEN BHAND TO 2*CM;\nMOVE BMANIP TO NOSUCH;\n", SEED_TASK)
     assert report.nominal.outcome == "error"
     assert report.nominal.line == 2 and "NOSUCH" in report.nominal.message
 
 
 def test_syntax_error_names_its_line() -> None:
     with pytest.raises(ALSyntaxError) as caught:
-        replay_program("OPEN BHAND TO 2*CM;\nMOVE BMANIP TO BPARK VIA;\n", SEED)
+        replay_program("OPEN BHAND TO 2*CM;\nMOVE BMANIP TO BPARK VIA;\n", SEED_TASK)
     assert caught.value.line == 2
 
 
@@ -259,8 +254,8 @@ def test_syntax_error_names_its_line() -> None:
 
 
 def test_report_json_has_the_issue_shape() -> None:
-    text = (DATA / "seed_4_8_search.al").read_text(encoding="utf-8")
-    document = replay_program(text, SEED, trials=3, seed=5).to_json()
+    text = (DATA_AL / "seed_4_8_search.al").read_text(encoding="utf-8")
+    document = replay_program(text, SEED_TASK, trials=3, seed=5).to_json()
     assert set(document) == {"ok", "nominal", "monte_carlo"}
     assert set(document["nominal"]) == {
         "outcome",
@@ -290,35 +285,37 @@ def run_cli(*args: str, capsys: pytest.CaptureFixture[str]) -> tuple[int, str, s
 
 
 def test_cli_exit_codes(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    search = str(DATA / "seed_4_8_search.al")
-    code, out, _ = run_cli(search, "--task", str(SEED), "--trials", "0", capsys=capsys)
+    search = str(DATA_AL / "seed_4_8_search.al")
+    code, out, _ = run_cli(search, "--task", str(SEED_TASK), "--trials", "0", capsys=capsys)
     assert code == 0 and "nominal: success" in out
     bad = tmp_path / "table.al"
     bad.write_text("MOVE BMANIP TO BPARK - VECTOR(0,0,12)*CM;\n", encoding="utf-8")
-    code, out, _ = run_cli(str(bad), "--task", str(SEED), "--trials", "0", "--json", capsys=capsys)
+    code, out, _ = run_cli(
+        str(bad), "--task", str(SEED_TASK), "--trials", "0", "--json", capsys=capsys
+    )
     assert code == 1
     document = json.loads(out)
     assert document["ok"] is False
     assert document["nominal"]["violations"][0]["kind"] == "collision"
     broken = tmp_path / "broken.al"
     broken.write_text("MOVE BMANIP TO;\n", encoding="utf-8")
-    code, _, err = run_cli(str(broken), "--task", str(SEED), capsys=capsys)
+    code, _, err = run_cli(str(broken), "--task", str(SEED_TASK), capsys=capsys)
     assert code == 2 and "broken.al:1:" in err
-    code, _, err = run_cli(str(tmp_path / "missing.al"), "--task", str(SEED), capsys=capsys)
+    code, _, err = run_cli(str(tmp_path / "missing.al"), "--task", str(SEED_TASK), capsys=capsys)
     assert code == 2 and "no such program file" in err
     code, _, err = run_cli(search, "--task", str(tmp_path / "missing.yaml"), capsys=capsys)
     assert code == 2
     unknown = tmp_path / "unknown.al"
     unknown.write_text("MOVE BMANIP TO NOSUCH;\n", encoding="utf-8")
-    code, out, _ = run_cli(str(unknown), "--task", str(SEED), "--trials", "0", capsys=capsys)
+    code, out, _ = run_cli(str(unknown), "--task", str(SEED_TASK), "--trials", "0", capsys=capsys)
     assert code == 2 and "NOSUCH" in out
 
 
 def test_cli_distribution_override_is_stated_and_checked(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    search = str(DATA / "seed_4_8_search.al")
-    args = (search, "--task", str(SEED), "--trials", "2", "--workers", "1")
+    search = str(DATA_AL / "seed_4_8_search.al")
+    args = (search, "--task", str(SEED_TASK), "--trials", "2", "--workers", "1")
     code, out, _ = run_cli(*args, "--distribution", "normal", capsys=capsys)
     assert code == 0 and "every block sampled normal (--distribution)" in out
     code, out, _ = run_cli(*args, capsys=capsys)
@@ -330,7 +327,7 @@ def test_cli_distribution_override_is_stated_and_checked(
 
 
 def test_cli_preamble_is_the_binding_as_al(capsys: pytest.CaptureFixture[str]) -> None:
-    code, out, _ = run_cli("--preamble", "--task", str(SEED), capsys=capsys)
+    code, out, _ = run_cli("--preamble", "--task", str(SEED_TASK), capsys=capsys)
     assert code == 0
     program = parse_program(out)
     names = {d.name for decl in program.body if hasattr(decl, "names") for d in decl.names}
@@ -339,9 +336,9 @@ def test_cli_preamble_is_the_binding_as_al(capsys: pytest.CaptureFixture[str]) -
 
 
 def test_cli_progress_bar_goes_to_stderr_when_asked(capsys: pytest.CaptureFixture[str]) -> None:
-    search = str(DATA / "seed_4_8_search.al")
+    search = str(DATA_AL / "seed_4_8_search.al")
     code, out, err = run_cli(
-        search, "--task", str(SEED), "--trials", "20", "--workers", "1", "--progress",
+        search, "--task", str(SEED_TASK), "--trials", "20", "--workers", "1", "--progress",
         capsys=capsys,
     )  # fmt: skip
     assert code == 0 and "| 20/20 [" in err and "trial/s]" in err and "trials" in out
@@ -349,7 +346,7 @@ def test_cli_progress_bar_goes_to_stderr_when_asked(capsys: pytest.CaptureFixtur
 
 def test_console_script_runs_as_a_process(tmp_path: Path) -> None:
     completed = subprocess.run(
-        [sys.executable, "-m", "synth.cli", "replay", "--preamble", "--task", str(SEED)],
+        [sys.executable, "-m", "synth.cli", "replay", "--preamble", "--task", str(SEED_TASK)],
         capture_output=True,
         text=True,
         timeout=120,

@@ -10,12 +10,11 @@ bound's own formulas.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import coal
 import numpy as np
 import pinocchio as pin
 import pytest
+from _paths import SEED_PROGRAM, SEED_TASK
 
 from synth.models.arm import SweepOptions
 from synth.replay import machine_for, replay_context
@@ -25,14 +24,10 @@ from synth.replay.contact import GJK_MARGIN, _Pin, _Target, pin_points
 from synth.replay.motion import Segment
 from synth.replay.truth import HandErrors, nominal_world
 
-ROOT = Path(__file__).parent.parent
-SEED_TASK = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
-GOLDEN = ROOT / "fixtures" / "golden" / "seed_4_8.al"
-
 
 @pytest.fixture(scope="module")
 def cell():  # type: ignore[no-untyped-def]
-    context = replay_context(GOLDEN.read_text(encoding="utf-8"), SEED_TASK)
+    context = replay_context(SEED_PROGRAM.read_text(encoding="utf-8"), SEED_TASK)
     machine = machine_for(context, nominal_world(context.graph), HandErrors.none())
     return context, machine
 

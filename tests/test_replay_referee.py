@@ -52,6 +52,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _paths import ROOT, SEED_PROGRAM, SEED_SEARCH, SEED_TASK
 
 from synth.cli import _TrialOutput, main
 from synth.replay import ReplayOptions, machine_for, replay_context, replay_program, run_trial
@@ -59,27 +60,23 @@ from synth.replay.report import RunReport
 from synth.replay.run import TrialRecord, trial_errors
 from synth.replay.truth import HandErrors, nominal_world
 
-ROOT = Path(__file__).parent.parent
-SEED_TASK = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
-SEARCH = ROOT / "tests" / "data" / "al" / "seed_4_8_search.al"
-GOLDEN = ROOT / "fixtures" / "golden" / "seed_4_8.al"
 SYNTH = Path(sys.executable).parent / "synth"
 
 RECORDED = {
-    (SEARCH, 0): {"success": 194, "abort": 6},
-    (SEARCH, 1): {"success": 195, "abort": 5},
-    (GOLDEN, 0): {"success": 199, "abort": 1},
-    (GOLDEN, 1): {"success": 200},
+    (SEED_SEARCH, 0): {"success": 194, "abort": 6},
+    (SEED_SEARCH, 1): {"success": 195, "abort": 5},
+    (SEED_PROGRAM, 0): {"success": 199, "abort": 1},
+    (SEED_PROGRAM, 1): {"success": 200},
 }
 
 
 @pytest.mark.parametrize(
     ("program", "seed"),
     [
-        (SEARCH, 0),
-        (GOLDEN, 0),
-        pytest.param(SEARCH, 1, marks=pytest.mark.slow),
-        pytest.param(GOLDEN, 1, marks=pytest.mark.slow),
+        (SEED_SEARCH, 0),
+        (SEED_PROGRAM, 0),
+        pytest.param(SEED_SEARCH, 1, marks=pytest.mark.slow),
+        pytest.param(SEED_PROGRAM, 1, marks=pytest.mark.slow),
     ],
     ids=["search-0", "golden-0", "search-1", "golden-1"],
 )
@@ -91,7 +88,9 @@ def test_outcome_counts_are_the_recorded_ones(program: Path, seed: int) -> None:
 
 
 @pytest.mark.parametrize(
-    ("program", "indices"), [(SEARCH, (0, 1, 2, 18)), (GOLDEN, (0, 1, 2))], ids=["search", "golden"]
+    ("program", "indices"),
+    [(SEED_SEARCH, (0, 1, 2, 18)), (SEED_PROGRAM, (0, 1, 2))],
+    ids=["search", "golden"],
 )
 def test_fast_path_runs_are_the_reference_runs(program: Path, indices: tuple[int, ...]) -> None:
     text = program.read_text(encoding="utf-8")
@@ -106,13 +105,13 @@ def test_fast_path_runs_are_the_reference_runs(program: Path, indices: tuple[int
             b.statements,
         )
         assert a.time == pytest.approx(b.time, abs=25e-3)
-    if program == SEARCH:
+    if program == SEED_SEARCH:
         assert run_trial(fast, 0, 18).outcome == "abort"  # a failing trial is among them
 
 
 @pytest.fixture(scope="module")
 def scene():  # type: ignore[no-untyped-def]
-    context = replay_context(GOLDEN.read_text(encoding="utf-8"), SEED_TASK)
+    context = replay_context(SEED_PROGRAM.read_text(encoding="utf-8"), SEED_TASK)
     machine = machine_for(context, nominal_world(context.graph), HandErrors.none())
     return machine.scene()
 
@@ -167,7 +166,7 @@ def _cli(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str]
 def _replay_args(trials: int, *extra: str) -> list[str]:
     return [
         "replay",
-        str(SEARCH),
+        str(SEED_SEARCH),
         "--task",
         str(SEED_TASK),
         "--trials",
@@ -183,7 +182,7 @@ def test_json_streams_one_record_per_trial(capsys: pytest.CaptureFixture[str]) -
     assert code == 0
     document = json.loads(out)
     assert list(document) == ["trials", "ok", "nominal", "monte_carlo"]
-    context = replay_context(SEARCH.read_text(encoding="utf-8"), SEED_TASK)
+    context = replay_context(SEED_SEARCH.read_text(encoding="utf-8"), SEED_TASK)
     assert [r["index"] for r in document["trials"]] == [0, 1, 2, 3]
     for record in document["trials"]:
         run = run_trial(context, 0, record["index"])
@@ -204,7 +203,7 @@ def test_failures_and_min_success(capsys: pytest.CaptureFixture[str]) -> None:
     assert "outcomes: success 29, abort 1" in out
     assert "first 1 failing trial(s):" in out
     assert "trial 18: abort at line 60: EXPECTED A FORCE HERE" in out
-    errors = trial_errors(replay_context(SEARCH.read_text(encoding="utf-8"), SEED_TASK), 0, 18)
+    errors = trial_errors(replay_context(SEED_SEARCH.read_text(encoding="utf-8"), SEED_TASK), 0, 18)
     box = errors["box"]
     assert f"box: x {100 * box['x']:+.4f} cm, y {100 * box['y']:+.4f} cm" in out
     assert f"rz {math.degrees(box['rz']):+.4f}°" in out
@@ -214,11 +213,11 @@ def test_failures_and_min_success(capsys: pytest.CaptureFixture[str]) -> None:
 
 def test_one_trial_alone_is_the_trial_of_the_full_run(capsys: pytest.CaptureFixture[str]) -> None:
     code, out = _cli(
-        ["replay", str(SEARCH), "--task", str(SEED_TASK), "--trial", "18", "--json"], capsys
+        ["replay", str(SEED_SEARCH), "--task", str(SEED_TASK), "--trial", "18", "--json"], capsys
     )
     assert code == 1  # an abort
     record = json.loads(out)
-    context = replay_context(SEARCH.read_text(encoding="utf-8"), SEED_TASK)
+    context = replay_context(SEED_SEARCH.read_text(encoding="utf-8"), SEED_TASK)
     run = run_trial(context, 0, 18)
     assert record["index"] == 18 and record["seed"] == 0
     assert (record["outcome"], record["line"], record["time"]) == (run.outcome, run.line, run.time)

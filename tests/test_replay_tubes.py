@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
-from _paths import DATA, GOLDEN, SEED_TASK
+from _paths import SEED_PROGRAM, SEED_SEARCH, SEED_TASK
 
 from synth.models.arm import Obstacle, SweepOptions
 from synth.replay import machine_for, replay_context, run_trial
@@ -29,7 +29,7 @@ POINTS = 120
 
 @pytest.fixture(scope="module")
 def cell():  # type: ignore[no-untyped-def]
-    context = replay_context((GOLDEN / "seed_4_8.al").read_text(encoding="utf-8"), SEED_TASK)
+    context = replay_context(SEED_PROGRAM.read_text(encoding="utf-8"), SEED_TASK)
     machine = machine_for(context, nominal_world(context.graph), HandErrors.none())
     return context, machine
 
@@ -109,7 +109,7 @@ def _runs(program: Path, trials: int) -> list[tuple[object, ...]]:
     return [(r.outcome, r.line, r.message, r.statements, r.time) for r in runs]
 
 
-@pytest.mark.parametrize("program", [GOLDEN / "seed_4_8.al", DATA / "al" / "seed_4_8_search.al"])
+@pytest.mark.parametrize("program", [SEED_PROGRAM, SEED_SEARCH])
 def test_trials_are_the_same_with_and_without_tubes(program: Path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     # 200 trials of both programs with seed 0 were compared when the tubes were written: all
     # identical in outcome, line, message, statements and simulated time

@@ -20,11 +20,11 @@ machine and, where the replay has the same motion, on the replay's machine too:
 from __future__ import annotations
 
 from collections.abc import Sequence
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
+from _paths import SEED_PROGRAM, SEED_TASK
 
 from synth.al.interpreter import Interpreter
 from synth.al.machine import DurationConstraint, IdealMachine, MachineCommand
@@ -33,9 +33,6 @@ from synth.al.timeline import segment_times
 from synth.replay import machine_for, replay_context
 from synth.replay.truth import HandErrors, nominal_world
 
-ROOT = Path(__file__).parent.parent
-SEED_TASK = ROOT / "fixtures" / "tasks" / "seed_4_8.yaml"
-GOLDEN = ROOT / "fixtures" / "golden" / "seed_4_8.al"
 OZ = 0.27801385095378626  # [N] one ounce-force: 0.028349523125 kg × 9.80665 m/s²
 
 
@@ -47,7 +44,7 @@ def run_ideal(text: str, machine: IdealMachine) -> Interpreter:
 
 def run_replay(text: str) -> tuple[Interpreter, float]:
     """Run ``text`` on the replay's machine in the seed task's nominal world: (it, hand_time)."""
-    context = replay_context(GOLDEN.read_text(encoding="utf-8"), SEED_TASK)
+    context = replay_context(SEED_PROGRAM.read_text(encoding="utf-8"), SEED_TASK)
     machine = machine_for(context, nominal_world(context.graph), HandErrors.none())
     interpreter = context.binding.interpreter(machine)
     interpreter.run(parse_program(text, filename="t.al"))
