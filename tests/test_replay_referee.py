@@ -263,8 +263,15 @@ def test_trial_output_keeps_at_most_k_failures_and_streams_json() -> None:
 def test_ctrl_c_stops_within_a_second_and_reports_the_trials_done(workers: str) -> None:
     command = [str(SYNTH), *_replay_args(100_000, "--progress")]
     command[command.index("--workers") + 1] = workers
+    # SIGINT at its default in the child: a test run started in the background of a
+    # non-interactive shell ignores it, and a command started ignoring SIGINT keeps ignoring it
     process = subprocess.Popen(
-        command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT
+        command,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=ROOT,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     assert process.stderr is not None
     seen = ""

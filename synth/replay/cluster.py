@@ -29,7 +29,7 @@ from typing import Any
 
 from synth.exceptions import SynthError
 from synth.replay.report import RunReport
-from synth.replay.trials import TrialJob, run_chunk
+from synth.replay.trials import TrialJob, result_or_interrupt, run_chunk
 
 __all__ = ["dask_client", "iter_trials_on"]
 
@@ -55,12 +55,13 @@ def _threads(client: Any) -> int:
 
 
 def iter_trials_on(
-    client: Any, job: TrialJob, seed: int, count: int
+    client: Any, job: TrialJob, seed: int, count: int, stop: threading.Event | None = None
 ) -> Generator[RunReport, None, None]:
     """Trials 0 … count−1 of ``job`` run on ``client``'s cluster, yielded in trial order.
 
     At most ``_AHEAD`` tasks of ``_CHUNK`` trials per worker thread are in flight, so memory
-    stays bounded whatever ``count`` is.
+    stays bounded whatever ``count`` is. ``stop``: as for
+    :func:`~synth.replay.trials.iter_trials`.
     """
     limit = _AHEAD * _threads(client)
     starts: Iterator[int] = iter(range(0, count, _CHUNK))
@@ -71,11 +72,11 @@ def iter_trials_on(
                 a = next(starts, None)
                 if a is None:
                     break
-                stop = min(a + _CHUNK, count)
-                in_flight.append(client.submit(_run_chunk_serial, job, seed, a, stop, pure=False))
+                end = min(a + _CHUNK, count)
+                in_flight.append(client.submit(_run_chunk_serial, job, seed, a, end, pure=False))
             if not in_flight:
                 return
-            yield from in_flight.popleft().result()
+            yield from result_or_interrupt(in_flight.popleft(), stop)
     finally:
         if in_flight:
             client.cancel(list(in_flight))

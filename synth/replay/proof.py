@@ -41,7 +41,7 @@ from synth.replay.machine import ReplayOptions
 from synth.replay.report import MonteCarloReport, RunReport, wilson_interval
 from synth.replay.run import replay_context, run_nominal, summarise, trial_errors
 from synth.replay.tally import TrialTally
-from synth.replay.trials import TrialPool, iter_trials, job_for
+from synth.replay.trials import TrialPool, deferred_interrupts, iter_trials, job_for
 
 __all__ = [
     "DEFAULT_MIN_SUCCESS",
@@ -330,17 +330,21 @@ def prove(
     first: tuple[int, RunReport] | None = None
     decision: Decision | None = None
     try:
-        trials = iter_trials(job, context, opts.seed, opts.trials, active)
-        for run in trials:
-            tally.add(run)
-            if first is None and not run.success:
-                first = (tally.count - 1, run)
-            if progress is not None:
-                progress(tally.count, opts.trials)
-            decision = _decide(opts, tally.successes, tally.count)
-            if decision is not None:
-                trials.close()
-                break
+        with deferred_interrupts() as stop:
+            trials = iter_trials(job, context, opts.seed, opts.trials, active, stop)
+            for run in trials:
+                tally.add(run)
+                if first is None and not run.success:
+                    first = (tally.count - 1, run)
+                if progress is not None:
+                    progress(tally.count, opts.trials)
+                decision = _decide(opts, tally.successes, tally.count)
+                if decision is not None:
+                    trials.close()
+                    break
+    except KeyboardInterrupt:
+        active.abort()  # Ctrl-C: the workers stop mid-trial, not after their queue
+        raise
     finally:
         if own_pool:
             active.close()

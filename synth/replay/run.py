@@ -54,7 +54,7 @@ from synth.models.workcell import WorkcellModel
 from synth.replay.machine import ReplayMachine, ReplayOptions, ViolationStop
 from synth.replay.report import MonteCarloReport, Outcome, ReplayReport, RunReport
 from synth.replay.tally import TrialTally
-from synth.replay.trials import TrialPool, iter_trials, job_for
+from synth.replay.trials import TrialPool, deferred_interrupts, iter_trials, job_for
 from synth.replay.truth import HandErrors, TrueWorld, nominal_world, sample_world
 
 __all__ = [
@@ -397,13 +397,16 @@ def replay_program(
     job = job_for(program_text, context, filename=filename, base_dir=base_dir, options=options)
     tally = TrialTally()  # bounded memory, whatever ``trials`` is
     interrupted = False
-    with TrialPool(1 if client is not None else min(workers, max(trials, 1))) as pool:
+    with (
+        TrialPool(1 if client is not None else min(workers, max(trials, 1))) as pool,
+        deferred_interrupts() as stop,
+    ):
         if client is not None:
             from synth.replay.cluster import iter_trials_on
 
-            runs = iter_trials_on(client, job, seed, trials)
+            runs = iter_trials_on(client, job, seed, trials, stop)
         else:
-            runs = iter_trials(job, context, seed, trials, pool)
+            runs = iter_trials(job, context, seed, trials, pool, stop)
         try:
             for run in runs:
                 if on_trial is not None and not (failures_only and run.success):

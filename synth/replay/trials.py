@@ -21,13 +21,15 @@ import multiprocessing
 import os
 import signal
 import sys
+import threading
 import warnings
 from collections import OrderedDict, deque
-from collections.abc import Generator
+from collections.abc import Generator, Iterator
 from concurrent.futures import Future, ProcessPoolExecutor
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from synth.cores import available_cores
 from synth.models.spec import TaskSpec
@@ -40,10 +42,12 @@ if TYPE_CHECKING:  # run imports this module
 __all__ = [
     "TrialJob",
     "TrialPool",
+    "deferred_interrupts",
     "iter_trials",
     "job_for",
     "main_reimport_is_unsafe",
     "max_in_flight",
+    "result_or_interrupt",
     "run_chunk",
     "start_method",
 ]
@@ -293,12 +297,64 @@ def max_in_flight(workers: int) -> int:
     return _AHEAD * workers
 
 
+@contextmanager
+def deferred_interrupts() -> Iterator[threading.Event]:
+    """Ctrl-C sets the event yielded instead of raising wherever the main thread is.
+
+    A ``KeyboardInterrupt`` raised asynchronously can land inside the process pool's own
+    bookkeeping (a ``with lock:`` of ``ProcessPoolExecutor.submit``, a future's condition) and
+    leave a lock held, and then stopping the pool deadlocks: ``synth replay --workers 2``
+    was seen to hang after Ctrl-C about once in 20 runs. The trial loops
+    (:func:`iter_trials`, :func:`~synth.replay.cluster.iter_trials_on`) raise it themselves
+    at a safe point instead, between trials or while waiting for one
+    (:func:`result_or_interrupt`), within :data:`_POLL` seconds. Outside the main thread, or
+    when SIGINT is not Python's default handler, nothing is installed and the event stays
+    clear.
+    """
+    stop = threading.Event()
+    main = threading.current_thread() is threading.main_thread()
+    if not main or signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        yield stop
+        return
+
+    def interrupted(signum: int, frame: object) -> None:
+        stop.set()
+
+    previous = signal.signal(signal.SIGINT, interrupted)
+    try:
+        yield stop
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+_POLL = 0.05
+"""[s] how often a wait for a trial's result looks at the interrupt event."""
+
+
+def result_or_interrupt(future: Any, stop: threading.Event | None) -> Any:
+    """``future.result()``, raising ``KeyboardInterrupt`` once ``stop`` is set.
+
+    For a ``concurrent.futures`` or a Dask future alike (both raise the builtin
+    ``TimeoutError`` when a wait times out).
+    """
+    if stop is None:
+        return future.result()
+    while True:
+        if stop.is_set():
+            raise KeyboardInterrupt
+        try:
+            return future.result(timeout=_POLL)
+        except TimeoutError:
+            continue
+
+
 def iter_trials(
     job: TrialJob,
     context: ReplayContext,
     seed: int,
     count: int,
     pool: TrialPool | None = None,
+    stop: threading.Event | None = None,
 ) -> Generator[RunReport, None, None]:
     """Trials 0 … count−1 of ``job`` in trial order (see the module docstring).
 
@@ -307,12 +363,16 @@ def iter_trials(
     no more memory than 10).
 
     ``context`` is the caller's own :class:`~synth.replay.run.ReplayContext` of ``job``: the
-    trials run in it when ``pool`` is None or has one worker.
+    trials run in it when ``pool`` is None or has one worker. ``stop`` (of
+    :func:`deferred_interrupts`): once set, a ``KeyboardInterrupt`` is raised here, between
+    trials or while waiting for one.
     """
     if pool is None or pool.workers == 1 or count <= _CHUNK:
         from synth.replay.run import run_trial
 
         for i in range(count):
+            if stop is not None and stop.is_set():
+                raise KeyboardInterrupt
             yield run_trial(context, seed, i)
         return
     executor = pool.executor()
@@ -327,7 +387,7 @@ def iter_trials(
                 in_flight.append(executor.submit(_run_chunk, job, seed, a, min(a + _CHUNK, count)))
             if not in_flight:
                 return
-            yield from in_flight.popleft().result()
+            yield from result_or_interrupt(in_flight.popleft(), stop)
     finally:
         for future in in_flight:
             future.cancel()
