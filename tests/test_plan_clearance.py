@@ -138,7 +138,7 @@ def test_with_margins_no_sampled_world_hits_the_box_on_the_gross_motions(old_bas
     # collide anywhere; with p = 56/300, 0 of 60 would have chance
     # (1 − 0.187)^60 ≈ 4e-6.
     program = emit_program(plan_task(old_base).strategy, believed_graph(old_base))
-    report = replay_program(program, old_base, trials=60, seed=1, workers=2, base_dir=TASKS)
+    report = replay_program(program, old_base, trials=60, seed=1, workers=1, base_dir=TASKS)
     hits = [v for run in report.trials for v in run.violations if v.kind == "collision"]
     assert report.nominal.outcome == "success" and hits == []
 

@@ -24,7 +24,7 @@ from synth.replay.truth import HandErrors, nominal_world
 from synth.replay.tubes import BUILDS, Tubes, certify
 
 CLEARANCE = 1e-3
-POINTS = 120
+POINTS = 60
 
 
 @pytest.fixture(scope="module")
@@ -56,7 +56,7 @@ def test_tubes_prove_only_what_the_truth_keeps_clear(cell) -> None:  # type: ign
     environment = scene.environment
     rng = np.random.default_rng(11)
     built = proven = checked = partial_agree = 0
-    for _ in range(12):
+    for _ in range(8):
         q0 = rng.uniform(limits.lower, limits.upper)
         q1 = np.clip(q0 + rng.normal(scale=0.4, size=q0.size), limits.lower, limits.upper)
         scene.reposition(environment, scene.held)
@@ -86,7 +86,7 @@ def test_tubes_prove_only_what_the_truth_keeps_clear(cell) -> None:  # type: ign
             partial_agree += 1
     scene.reposition(environment, scene.held)
     # not vacuous: tubes were built and proved most pairs of the nearby paths
-    assert built >= 5 and partial_agree >= 15
+    assert built >= 4 and partial_agree >= 12
     assert proven >= 0.5 * checked
 
 
@@ -109,11 +109,21 @@ def _runs(program: Path, trials: int) -> list[tuple[object, ...]]:
     return [(r.outcome, r.line, r.message, r.statements, r.time) for r in runs]
 
 
-@pytest.mark.parametrize("program", [SEED_PROGRAM, SEED_SEARCH])
-def test_trials_are_the_same_with_and_without_tubes(program: Path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+@pytest.mark.parametrize(
+    ("program", "trials"),
+    [
+        (SEED_SEARCH, 20),
+        pytest.param(SEED_SEARCH, 100, marks=pytest.mark.slow),
+        pytest.param(SEED_PROGRAM, 100, marks=pytest.mark.slow),
+    ],
+    ids=["search-20", "search-100", "golden-100"],
+)
+def test_trials_are_the_same_with_and_without_tubes(
+    program: Path, trials: int, monkeypatch
+) -> None:  # type: ignore[no-untyped-def]
     # 200 trials of both programs with seed 0 were compared when the tubes were written: all
     # identical in outcome, line, message, statements and simulated time
-    with_tubes = _runs(program, 30)
+    with_tubes = _runs(program, trials)
     monkeypatch.setattr(Tubes, "unproven", lambda self, *a, **k: None)
     monkeypatch.setattr(Tubes, "build", lambda self, *a, **k: None)
-    assert _runs(program, 30) == with_tubes
+    assert _runs(program, trials) == with_tubes
