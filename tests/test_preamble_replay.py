@@ -8,15 +8,14 @@ the preamble's statements on top of the bare program's count.
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
-from _paths import ROOT, SEED_FIRST_CUT, SEED_TASK
+from _paths import SEED_FIRST_CUT, SEED_TASK
 
 from synth.al import ast
 from synth.al.parser import parse_program
+from synth.cli import main
 from synth.codegen.binding import bind_world, preamble
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
@@ -67,26 +66,15 @@ def test_a_program_may_still_declare_its_own_frames_twice_in_nested_blocks() -> 
     assert report.nominal.outcome != "error", report.nominal.message
 
 
-def test_cli_plan_preamble_output_replays(tmp_path: Path) -> None:
+def test_cli_plan_preamble_output_replays(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     # Before: "BOX is declared twice in this block" (exit 2) for every --preamble output.
     out = tmp_path / "x.al"
-    synth = [sys.executable, "-m", "synth.cli"]
     args = ["--preamble", "-o", str(out), "--proof-trials", "0", "--workers", "1"]
-    plan = subprocess.run(
-        [*synth, "plan", str(SEED_TASK), *args],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        cwd=ROOT,
-    )
-    assert plan.returncode == 0, plan.stderr
+    assert main(["plan", str(SEED_TASK), *args]) == 0, capsys.readouterr().err
     assert out.read_text(encoding="utf-8").startswith("{ World binding of task seed_4_8")
-    again = subprocess.run(
-        [*synth, "replay", str(out), "--task", str(SEED_TASK), "--trials", "0", "--workers", "1"],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        cwd=ROOT,
-    )
-    assert again.returncode == 0, again.stdout + again.stderr
-    assert "nominal: success: PIN1 seated in BH1" in again.stdout
+    capsys.readouterr()
+    replayed = ["replay", str(out), "--task", str(SEED_TASK), "--trials", "0", "--workers", "1"]
+    assert main(replayed) == 0
+    assert "nominal: success: PIN1 seated in BH1" in capsys.readouterr().out
