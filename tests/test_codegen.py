@@ -88,6 +88,7 @@ def test_golden_file_byte_for_byte(task: str) -> None:
     assert actual == expected, f"{path} is out of date: run python scripts/regen_golden.py"
 
 
+@pytest.mark.slow  # it plans every golden task again: the byte-for-byte test above does that
 def test_regen_script_check_mode_passes() -> None:
     assert REGEN.main(["--check"]) == 0
 

@@ -7,15 +7,14 @@ from __future__ import annotations
 
 import copy
 import math
-import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
 import pytest
 import yaml
-from _paths import ROOT, SEED_TASK
+from _paths import SEED_TASK
 
+from synth.cli import main
 from synth.exceptions import SpecError, UnitError
 from synth.models.loader import validate_task
 from synth.units import DEG, INCH, MAX_MAGNITUDE, RATE_RANGE, parse_quantity, rate_si
@@ -212,7 +211,7 @@ def test_constraint_coefficients_are_quantities_not_expressions() -> None:
     [("1e300 lightyear", "not finite"), ("9**9**9 cm", "no expressions")],
 )
 def test_cli_refuses_extreme_quantities_with_exit_2(
-    tmp_path: Path, value: str, message: str
+    tmp_path: Path, value: str, message: str, capsys: pytest.CaptureFixture[str]
 ) -> None:
     data = seed()
     i, box = frame(data, "box")
@@ -220,12 +219,7 @@ def test_cli_refuses_extreme_quantities_with_exit_2(
     task = tmp_path / "task.yaml"
     task.write_text(yaml.safe_dump(data), encoding="utf-8")
     for command in (["errors", str(task), "--from", "BH1", "--to", "PIN1"], ["plan", str(task)]):
-        result = subprocess.run(
-            [sys.executable, "-m", "synth.cli", *command],
-            capture_output=True,
-            text=True,
-            timeout=60,
-            cwd=ROOT,
-        )
-        assert result.returncode == 2, result.stdout + result.stderr
-        assert f"frames[{i}].pose.translation[0]" in result.stderr and message in result.stderr
+        code = main(command)
+        err = capsys.readouterr().err
+        assert code == 2, err
+        assert f"frames[{i}].pose.translation[0]" in err and message in err

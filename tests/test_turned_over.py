@@ -6,8 +6,6 @@ pin only by its tip, and the emitted guard's direction is fixed when each move s
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -16,6 +14,7 @@ from _paths import DATA_TASKS
 from test_al_interpreter import H, Rx, ScriptedMachine, run
 
 from synth.al.machine import ForceMonitor
+from synth.cli import main
 from synth.exceptions import SpecError
 from synth.models.graph import AttributeGraph
 from synth.models.insertion import derive
@@ -69,15 +68,10 @@ def test_the_planner_refuses_a_turned_over_pin_naming_the_direction() -> None:
     assert "PIN1 would enter BH1 head first" in info.value.detail
 
 
-def test_synth_plan_exits_2_with_the_root_cause_first(tmp_path: Path) -> None:
+def test_synth_plan_exits_2_with_the_root_cause_first(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     out = tmp_path / "p.al"
-    done = subprocess.run(
-        [sys.executable, "-m", "synth.cli", "plan", str(TASK), "-o", str(out)],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        check=False,
-    )
-    assert done.returncode == 2 and not out.exists()
-    first = done.stderr.strip().splitlines()[0]
+    assert main(["plan", str(TASK), "-o", str(out)]) == 2 and not out.exists()
+    first = capsys.readouterr().err.strip().splitlines()[0]
     assert "insertion.direction" in first and "turned-over pin" in first
