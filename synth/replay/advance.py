@@ -126,6 +126,29 @@ class PairMotion:
         base = PairMotion((), scene.pairs, joints, empty, supports, sides, masks, exact)
         return base._moved(scene)
 
+    def steps(
+        self,
+        chain: ArmChain,
+        q0: NDArray[np.float64],
+        q1: NDArray[np.float64],
+        checked: NDArray[np.int64] | None = None,
+    ) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]:
+        """The straight joint move q₀ → q₁ seen by the ``checked`` pairs (all by default).
+
+        ``signed[k, i]`` the joint step Δ = q₁ − q₀ restricted to the joints moving side i of
+        pair k; ``sides[k]`` its bodies; ``curvature[k]`` the bound on the second derivative of
+        pair k's gap along s: :func:`~synth.replay.bounds.curvatures` of each side's levers
+        (over the box q₀ … q₁) and |Δ|, summed over both sides.
+        """
+        delta = np.asarray(q1, dtype=float) - np.asarray(q0, dtype=float)
+        masks = self.masks if checked is None else self.masks[checked]
+        sides = self.sides if checked is None else self.sides[checked]
+        signed = delta[None, None, :] * masks
+        levers = chain.levers(self.supports, self.radii, q0, q1)
+        curvature = curvatures(chain.revolute, levers[sides[:, 0]], np.abs(signed[:, 0]))
+        curvature += curvatures(chain.revolute, levers[sides[:, 1]], np.abs(signed[:, 1]))
+        return signed, sides, curvature
+
     def _moved(self, scene: CollisionScene) -> PairMotion:
         """The same structure with the scene's current placements."""
         radii = np.array(
@@ -304,11 +327,7 @@ def fast_sweep(
     if relax and float(np.min(start_d)) < clearance:
         clearance = max(0.5 * float(np.min(start_d)), 0.0)
     slack = min(_SLACK, 0.1 * clearance)
-    signed = delta[None, None, :] * motion.masks[checked]  # (pairs, 2, nv)
-    levers = chain.levers(motion.supports, motion.radii, q0, q1)
-    sides = motion.sides[checked]
-    curvature = curvatures(chain.revolute, levers[sides[:, 0]], np.abs(signed[:, 0]))
-    curvature += curvatures(chain.revolute, levers[sides[:, 1]], np.abs(signed[:, 1]))
+    signed, sides, curvature = motion.steps(chain, q0, q1, checked)  # signed: (pairs, 2, nv)
     gap0 = below_gap(start_d, margins)
     rate0 = closing_rates(start, motion, sides, signed)
     if float(np.min(start_d - margins)) <= clearance:

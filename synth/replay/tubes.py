@@ -54,7 +54,7 @@ from synth.replay.advance import (
     closing_rates,
     two_ended_floor,
 )
-from synth.replay.bounds import ArmChain, curvatures
+from synth.replay.bounds import ArmChain
 
 __all__ = ["BUILDS", "Placements", "Tube", "Tubes", "certify"]
 
@@ -170,11 +170,7 @@ def certify(
     margins = motion.margins(options)
     exact_below = options.clearance + margins
     delta = q1 - q0
-    signed = delta[None, None, :] * motion.masks
-    levers = chain.levers(motion.supports, motion.radii, q0, q1)
-    sides = motion.sides
-    curvature = curvatures(chain.revolute, levers[sides[:, 0]], np.abs(signed[:, 0]))
-    curvature += curvatures(chain.revolute, levers[sides[:, 1]], np.abs(signed[:, 1]))
+    signed, sides, curvature = motion.steps(chain, q0, q1)
 
     def point(s: float) -> tuple[float, NDArray[np.float64], NDArray[np.float64]]:
         ends = Ends.measure(scene, q0 + s * delta, exact_below)
