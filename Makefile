@@ -6,6 +6,11 @@ STAMP  := $(VENV)/.installed
 
 .PHONY: demo test test-slow lint typecheck bench fuzz clean browser
 
+# Where the environment sets PYTHONDONTWRITEBYTECODE, every test run would compile the project
+# and re-run pytest's assertion rewriting of every test module in every worker (about 6 s of
+# each worker's start here); the test targets let Python keep its bytecode caches.
+PYTEST := PYTHONDONTWRITEBYTECODE= $(BIN)/python -m pytest
+
 FUZZ_CASES ?= 1000
 FUZZ_ARGS  ?=
 
@@ -38,12 +43,13 @@ browser:
 	  || echo "chromium not installed: the browser test will skip"; }
 
 # The default suite leaves out the long Monte Carlo runs (pytest -m "not slow", pyproject.toml)
-# and spreads the tests over the cores; `make test-slow` runs the rest.
+# and spreads the tests over the cores (work stealing: a worker left with long tests at the end
+# hands them to an idle one); `make test-slow` runs the rest.
 test: $(STAMP) lint typecheck browser
-	$(BIN)/python -m pytest -n auto
+	$(PYTEST) -n auto --dist worksteal
 
 test-slow: $(STAMP)
-	$(BIN)/python -m pytest -n auto -m slow
+	$(PYTEST) -n auto --dist worksteal -m slow
 
 bench: $(STAMP)
 	for b in benchmarks/*.py; do $(BIN)/python $$b || exit 1; done

@@ -26,16 +26,37 @@ LOADS_NOTHING_ABOVE = [
 ]
 
 
-@pytest.mark.parametrize(("module", "forbidden"), LOADS_NOTHING_ABOVE)
-def test_a_layer_loads_nothing_above_it(module: str, forbidden: tuple[str, ...]) -> None:
+@pytest.fixture(scope="module")
+def loaded_above() -> dict[str, list[str]]:
+    """Per layer, the forbidden modules that importing it alone loads.
+
+    One fresh interpreter serves every layer: before each import it drops every ``synth``
+    module from ``sys.modules``, so the layer is imported as if alone (the forbidden names are
+    all ``synth`` modules; third-party modules staying loaded changes nothing about them).
+    """
     code = (
-        f"import sys, {module}\n"
-        f"print('\\n'.join(m for m in sys.modules if m.startswith({forbidden!r})))"
+        "import importlib, json, sys\n"
+        f"layers = {LOADS_NOTHING_ABOVE!r}\n"
+        "found = {}\n"
+        "for module, forbidden in layers:\n"
+        "    for name in [m for m in sys.modules if m == 'synth' or m.startswith('synth.')]:\n"
+        "        del sys.modules[name]\n"
+        "    importlib.import_module(module)\n"
+        "    found[module] = sorted(m for m in sys.modules if m.startswith(tuple(forbidden)))\n"
+        "print(json.dumps(found))"
     )
     out = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, check=True
-    ).stdout.split()
-    assert out == [], f"importing {module} loads {out}"
+    ).stdout
+    return json.loads(out)
+
+
+@pytest.mark.parametrize(("module", "forbidden"), LOADS_NOTHING_ABOVE)
+def test_a_layer_loads_nothing_above_it(
+    loaded_above: dict[str, list[str]], module: str, forbidden: tuple[str, ...]
+) -> None:
+    assert all(name.startswith("synth.") for name in forbidden)  # what the fixture relies on
+    assert loaded_above[module] == [], f"importing {module} loads {loaded_above[module]}"
 
 
 def test_synth_replay_loads_no_planner_and_of_the_estimator_only_the_sampler() -> None:

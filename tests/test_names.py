@@ -9,14 +9,13 @@ field named, and the interpreter knows no name the validator would let through.
 from __future__ import annotations
 
 import copy
-import subprocess
-import sys
+import functools
 from pathlib import Path
 from typing import Any
 
 import pytest
 import yaml
-from _paths import ROOT, SEED_TASK
+from _paths import SEED_TASK
 
 from synth.al import interpreter as interpreter_module
 from synth.al.names import (
@@ -31,10 +30,9 @@ from synth.al.names import (
 from synth.al.parser import grammar_keywords
 from synth.al.values import BUILTINS
 from synth.al.values import CONSTANTS as VALUE_CONSTANTS
+from synth.cli import main
 from synth.exceptions import SpecError
 from synth.models.loader import validate_task
-
-SYNTH = [sys.executable, "-m", "synth.cli"]
 
 DOCUMENTED_PREDECLARED = (
     # seed-al-subset.md §1 and al-language.md §4: constants and the blue arm
@@ -68,9 +66,15 @@ CONTROL = [
 """Line breaks, C0/C1 controls, DEL, no-break and Unicode line/paragraph separators, BOM."""
 
 
-def seed() -> dict[str, Any]:
+@functools.cache
+def _seed_parsed() -> dict[str, Any]:
     data: dict[str, Any] = yaml.safe_load(SEED_TASK.read_text(encoding="utf-8"))
     return data
+
+
+def seed() -> dict[str, Any]:
+    """The seed task as loaded from YAML: a fresh copy each call (the tests edit it)."""
+    return copy.deepcopy(_seed_parsed())
 
 
 def frame_index(data: dict[str, Any], al_name: str) -> int:
@@ -227,28 +231,26 @@ def test_the_interpreter_refuses_a_constant_as_the_hand() -> None:
 # End to end: exit 2 naming the field, never a program
 
 
-def run_cli(tmp_path: Path, data: dict[str, Any], *args: str) -> subprocess.CompletedProcess[str]:
+def run_cli(
+    tmp_path: Path, data: dict[str, Any], capsys: pytest.CaptureFixture[str]
+) -> tuple[int, str]:
+    """``synth plan`` on ``data`` in this process: (exit code, stderr)."""
     task = tmp_path / "task.yaml"
     task.write_text(yaml.safe_dump(data, allow_unicode=True), encoding="utf-8")
     out = tmp_path / "x.al"
-    return subprocess.run(
-        [*SYNTH, "plan", str(task), "-o", str(out), "--proof-trials", "0", "--workers", "1"],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        cwd=ROOT,
-    )
+    code = main(["plan", str(task), "-o", str(out), "--proof-trials", "0", "--workers", "1"])
+    return code, capsys.readouterr().err
 
 
 @pytest.mark.parametrize(
     ("field", "value"), [("manipulator", "TRUE"), ("frame", "BH1\n"), ("park", "ZHAT")]
 )
 def test_cli_plan_refuses_a_name_that_rewrites_the_program(
-    tmp_path: Path, field: str, value: str
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], field: str, value: str
 ) -> None:
     # With TRUE as the arm, `FLAG ← TRUE` in the search loop assigned the hand (exit 0 before).
     data, path = with_name(field, value)
-    result = run_cli(tmp_path, data)
-    assert result.returncode == 2, result.stderr
-    assert path in result.stderr and "Traceback" not in result.stderr
+    code, stderr = run_cli(tmp_path, data, capsys)
+    assert code == 2, stderr
+    assert path in stderr and "Traceback" not in stderr
     assert not (tmp_path / "x.al").exists()

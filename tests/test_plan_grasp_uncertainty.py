@@ -75,8 +75,14 @@ def test_rack_beyond_the_hands_opening_is_refused_naming_the_opening() -> None:
     assert "largest opening" in str(caught.value)
 
 
-def test_rail_rack_program_grasps_in_every_sampled_world() -> None:
-    """The replay (the referee) never reports GRASP FAILED in 100 sampled rack poses."""
+@pytest.mark.parametrize("trials", [40, pytest.param(200, marks=pytest.mark.slow)])
+def test_rail_rack_program_grasps_in_every_sampled_world(trials: int) -> None:
+    """The replay (the referee) never reports GRASP FAILED in the sampled rack poses.
+
+    The planner opens the hand for the rack's whole error block, so no sampled pose may miss
+    the fingers: any GRASP FAILED is a planner bug, however few the trials (200 in the slow
+    suite, 40 by default: ~60 ms a trial).
+    """
     from synth.codegen.emitter import emit_program
     from synth.models.believed import believed_graph
     from synth.replay.run import replay_program
@@ -84,6 +90,6 @@ def test_rail_rack_program_grasps_in_every_sampled_world() -> None:
     spec = load_task(DATA_TASKS / "uncertain_rack_rail.yaml")
     result = plan_task(spec, base_dir=TASKS)
     program = emit_program(result.strategy, believed_graph(spec))
-    report = replay_program(program, spec, trials=100, seed=0)
+    report = replay_program(program, spec, trials=trials, seed=0)
     assert report.nominal.outcome == "success"
     assert not [r for r in report.trials if r.message == "GRASP FAILED"]

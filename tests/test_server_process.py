@@ -91,55 +91,65 @@ class Server:
 
 
 @contextmanager
-def running(db: Path, *extra: str) -> Iterator[tuple[Server, httpx.Client]]:
+def running(
+    db: Path, *extra: str, headers: dict[str, str] | None = None
+) -> Iterator[tuple[Server, httpx.Client]]:
     server = Server(db, *extra)
     try:
-        with httpx.Client(base_url=server.url(), timeout=120.0) as client:
+        with httpx.Client(base_url=server.url(), timeout=120.0, headers=headers) as client:
             yield server, client
     finally:
         if server.process.poll() is None:
             server.stop(signal.SIGKILL)
 
 
-def test_serve_on_loopback_token_kill_9_and_restart(tmp_path: Path) -> None:
+def test_a_served_database_lives_through_sigterm_and_kill_9(tmp_path: Path) -> None:
+    """One database through three starts of the service (each start costs an interpreter and a
+    worker, so the three stories share them):
+
+    1. plans committed, and a long job running at a clean stop (SIGTERM);
+    2. the plan is intact and the long job runs again; a quick job waits behind it; kill -9;
+    3. the long job is reported lost, the queued one runs, the earlier results are intact.
+    """
     db = tmp_path / "plans.db"
-    auth = {**YAML, "Authorization": "Bearer s3cret"}
-    with running(db, "--token", "s3cret") as (server, client):
+    token = ("--token", "s3cret")
+    auth = {"Authorization": "Bearer s3cret"}
+    with running(db, *token, headers=auth) as (server, client):
         assert client.get("/healthz").json()["database"] == "ok"
-        assert client.post("/v1/plans", content=b"name: t\n", headers=YAML).status_code == 401
+        anonymous = {"Authorization": ""}
+        refused = client.post("/v1/plans", content=b"name: t\n", headers=YAML | anonymous)
+        assert refused.status_code == 401
         server.wait_ready(client)
-        bad = client.post("/v1/plans", content=b"name: t\nframes: []\n", headers=auth)
+        bad = client.post("/v1/plans", content=b"name: t\nframes: []\n", headers=YAML)
         assert bad.status_code == 422 and bad.json()["path"] == "frames"
         submitted = client.post(
-            "/v1/plans?validate=false", content=SEED_TASK.read_bytes(), headers=auth
+            "/v1/plans?validate=false", content=SEED_TASK.read_bytes(), headers=YAML | auth
         )
         plan = done(client, submitted)
         location = plan["links"]["self"]
-        server.stop(signal.SIGKILL)  # no shutdown, no checkpoint: only what was committed
-    with running(db, "--token", "s3cret") as (server, client):
+        earlier = client.post("/v1/replays?wait=30", json=QUICK)
+        assert earlier.status_code == 201 and earlier.json()["state"] == "done", earlier.text
+        long = client.post("/v1/replays", json=LONG)
+        assert long.status_code == 202
+        first = server.wait_running(client, long.headers["location"])
+        assert first["attempts"] == 1
+        # Clean shutdown (uvicorn re-raises the signal once it has shut down).
+        assert server.stop(signal.SIGTERM) in (0, -signal.SIGTERM)
+        assert any("Application shutdown complete" in line for line in server.log)
+        assert any("queued for the next start" in line for line in server.log)
+    with running(db, *token, headers=auth) as (server, client):
         again = client.get(location)
         assert again.status_code == 200
         assert again.json() == plan
         assert client.get(f"{location}/program.al").text == plan["program"]
         assert client.get(submitted.headers["location"]).json()["state"] == "done"
-        # Clean shutdown (uvicorn re-raises the signal once it has shut down).
-        assert server.stop(signal.SIGTERM) in (0, -signal.SIGTERM)
-        assert any("Application shutdown complete" in line for line in server.log)
-
-
-def test_after_kill_9_the_running_job_is_lost_and_the_queued_one_runs(tmp_path: Path) -> None:
-    db = tmp_path / "jobs.db"
-    with running(db) as (server, client):
-        server.wait_ready(client)
-        earlier = client.post("/v1/replays?wait=30", json=QUICK)
-        assert earlier.status_code == 201 and earlier.json()["state"] == "done", earlier.text
-        long = client.post("/v1/replays", json=LONG)
-        queued = client.post("/v1/replays", json=QUICK)  # one worker: it waits behind
-        assert long.status_code == queued.status_code == 202
-        server.wait_running(client, long.headers["location"])
+        rerun = server.wait_running(client, long.headers["location"])
+        assert rerun["attempts"] == 2 and rerun["started_at"] > first["started_at"]
+        queued = client.post("/v1/replays", json=QUICK)  # one worker: it waits
+        assert queued.status_code == 202
         assert client.get(queued.headers["location"]).json()["state"] == "queued"
-        server.stop(signal.SIGKILL)  # the running job's outcome is now unknown
-    with running(db) as (server, client):
+        server.stop(signal.SIGKILL)  # no shutdown: the running job's outcome is now unknown
+    with running(db, *token, headers=auth) as (server, client):
         lost = client.get(long.headers["location"]).json()
         assert lost["state"] == "lost" and lost["finished_at"] is not None
         assert lost["problem"]["status"] == 503 and lost["problem"]["title"] == "Job lost"
@@ -149,20 +159,3 @@ def test_after_kill_9_the_running_job_is_lost_and_the_queued_one_runs(tmp_path: 
         assert ran["result"]["nominal"]["outcome"] == "success"
         assert client.get(earlier.headers["location"]).json() == earlier.json()
         assert any("was running when the server stopped: lost" in line for line in server.log)
-
-
-def test_after_a_clean_stop_the_running_job_runs_again(tmp_path: Path) -> None:
-    db = tmp_path / "jobs.db"
-    with running(db) as (server, client):
-        server.wait_ready(client)
-        long = client.post("/v1/replays", json=LONG)
-        location = long.headers["location"]
-        first = server.wait_running(client, location)
-        assert first["attempts"] == 1
-        assert server.stop(signal.SIGTERM) in (0, -signal.SIGTERM)
-        assert any("queued for the next start" in line for line in server.log)
-    with running(db) as (server, client):
-        again = server.wait_running(client, location)
-        assert again["attempts"] == 2 and again["started_at"] > first["started_at"]
-        cancelled = client.delete(location)  # no need to sit through the 200 trials
-        assert cancelled.status_code == 200 and cancelled.json()["state"] == "cancelled"
