@@ -16,7 +16,7 @@ import pytest
 from _paths import SEED_SEARCH, SEED_TASK
 
 from synth.cli import main
-from synth.replay import replay_program
+from synth.replay import cluster, replay_program
 
 
 @pytest.fixture(scope="module")
@@ -39,7 +39,11 @@ def test_a_cluster_gives_the_local_report(client: Any) -> None:
     assert dict(local.monte_carlo.outcomes) == {"success": 19, "abort": 1}
 
 
-def test_an_unreachable_scheduler_is_a_usage_error(capsys: pytest.CaptureFixture[str]) -> None:
+def test_an_unreachable_scheduler_is_a_usage_error(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # Nothing listens on port 9 (discard): Dask retries until its timeout, which is only waited.
+    monkeypatch.setattr(cluster, "CONNECT_TIMEOUT_S", 0.5)
     argv = ["replay", str(SEED_SEARCH), "--task", str(SEED_TASK), "--trials", "2"]
     assert main([*argv, "--dask", "tcp://127.0.0.1:9"]) == 2
     assert "--dask tcp://127.0.0.1:9: cannot reach the scheduler" in capsys.readouterr().err

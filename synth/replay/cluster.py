@@ -39,6 +39,9 @@ _AHEAD = 4
 """Tasks in flight per worker thread."""
 _LOCK = threading.Lock()
 
+CONNECT_TIMEOUT_S = 5.0
+"""[s] how long ``--dask ADDRESS`` keeps retrying an unreachable scheduler before it gives up."""
+
 
 def _run_chunk_serial(job: TrialJob, seed: int, start: int, stop: int) -> list[RunReport]:
     """:func:`~synth.replay.trials.run_chunk`, one at a time in a worker process."""
@@ -108,7 +111,7 @@ def dask_client(address: str, workers: int) -> Generator[Any, None, None]:
             cluster.close()
         return
     try:
-        client = Client(address, timeout=5)
+        client = Client(address, timeout=CONNECT_TIMEOUT_S)
     except (OSError, TimeoutError) as exc:
         raise SynthError(f"--dask {address}: cannot reach the scheduler ({exc})") from None
     try:
