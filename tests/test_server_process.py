@@ -109,7 +109,8 @@ def test_a_served_database_lives_through_sigterm_and_kill_9(tmp_path: Path) -> N
 
     1. plans committed, and a long job running at a clean stop (SIGTERM);
     2. the plan is intact and the long job runs again; a quick job waits behind it; kill -9;
-    3. the long job is reported lost, the queued one runs, the earlier results are intact.
+    3. the long job is reported lost, the queued one runs, the earlier results are intact;
+       a running job is cancelled by DELETE.
     """
     db = tmp_path / "plans.db"
     token = ("--token", "s3cret")
@@ -158,4 +159,10 @@ def test_a_served_database_lives_through_sigterm_and_kill_9(tmp_path: Path) -> N
         assert ran["state"] == "done" and ran["attempts"] == 1
         assert ran["result"]["nominal"]["outcome"] == "success"
         assert client.get(earlier.headers["location"]).json() == earlier.json()
+        assert client.get(location).json() == plan  # kill -9: no checkpoint, still there
         assert any("was running when the server stopped: lost" in line for line in server.log)
+        # a running job on a real server is cancelled by DELETE (its worker killed)
+        again_long = client.post("/v1/replays", json=LONG)
+        server.wait_running(client, again_long.headers["location"])
+        cancelled = client.delete(again_long.headers["location"])
+        assert cancelled.status_code == 200 and cancelled.json()["state"] == "cancelled"
