@@ -2,9 +2,10 @@
 
 Planning is CPU-bound pure Python/C++ with no way to interrupt it from outside, so a thread
 that overruns its budget could only be abandoned, still burning a core. Each job therefore runs
-in one of ``size`` long-lived worker processes (with synth imported once); a job that
-overruns is answered with :class:`~server.errors.TimeBudgetExceeded` and its worker is killed
-and replaced. The event loop never blocks: it waits on the worker's pipe with ``add_reader``.
+in one of ``size`` long-lived worker processes, forked with synth already imported by this
+process's zygote (:mod:`server.zygote`); a job that overruns is answered with
+:class:`~server.errors.TimeBudgetExceeded` and its worker is killed and replaced in milliseconds.
+The event loop never blocks: it waits on the worker's socket with ``add_reader``.
 
 Why not a library pool: ``concurrent.futures``' ``ProcessPoolExecutor`` cannot stop a running call
 — a timed-out or cancelled job would keep its core — and killing one of its processes breaks the
@@ -15,9 +16,10 @@ terminating its worker, and an initializer could set the memory cap, but its wor
 which re-imports the server's ``__main__`` in every worker (a BrokenProcessPool in a script without
 a ``__main__`` guard); it cannot retire just the worker that hit ``MemoryError``; and it exposes no
 per-worker readiness, which ``/healthz`` (``idle``) and the jobs' wait for a worker use. This pool
-keeps those semantics in one place: fresh ``python -m server.workers`` interpreters, a budget that
-kills exactly the overrunning worker, cancellation that does the same (``DELETE`` of a running
-job), the address-space cap, and replacement after a crash or a ``MemoryError``.
+keeps those semantics in one place: workers forked from a fresh, single-threaded, warmed-up
+interpreter (the zygote), a budget that kills exactly the overrunning worker, cancellation that
+does the same (``DELETE`` of a running job), the address-space cap, and replacement after a crash
+or a ``MemoryError``.
 
 A job is a picklable top-level callable and its arguments. A :class:`~synth.exceptions.SynthError`
 raised in a worker is rebuilt in the server as the same class with the same fields, so the one
@@ -52,6 +54,7 @@ from server.exceptions import (
     TimeBudgetExceeded,
     WorkerFailed,
 )
+from server.zygote import ForkedProcess, zygote_for
 from synth.exceptions import SynthError
 
 log = logging.getLogger("server.workers")
@@ -103,14 +106,11 @@ def _limit_memory(limit: int) -> None:
         resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
 
 
-def _worker_main(conn: Connection, warmup: str, memory_limit: int = 0) -> None:
+def _worker_main(conn: Connection, memory_limit: int = 0) -> None:
     """Loop of a worker process: ``(fn, args)`` in, ``("ok", value)`` or an error out."""
     _die_with_parent()
     _limit_memory(memory_limit)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the server decides when workers stop
-    if warmup:
-        module, _, name = warmup.partition(":")
-        getattr(importlib.import_module(module), name)()
     conn.send(("ready", os.getpid()))
     while True:
         try:
@@ -139,7 +139,7 @@ def _worker_main(conn: Connection, warmup: str, memory_limit: int = 0) -> None:
 
 @dataclass(eq=False)
 class _Worker:
-    process: subprocess.Popen[bytes]
+    process: ForkedProcess
     conn: Connection
     started: float = field(default_factory=time.monotonic)
 
@@ -147,9 +147,9 @@ class _Worker:
 class WorkerPool:
     """``size`` worker processes; :meth:`run` executes one job on a free one within a budget.
 
-    Workers are fresh interpreters (``python -m server.workers FD WARMUP``) talking over a
-    socket pair, so they never re-import the server's ``__main__``. ``warmup`` names a
-    ``module:function`` each worker calls once before its first job (its imports).
+    Workers are forks of this process's zygote for ``warmup`` (a ``module:function`` the zygote
+    calls once: its imports), talking over a socket pair; they never re-import the server's
+    ``__main__``.
     ``memory_limit`` [bytes] caps each worker's address space (0: no cap), so a job that tries
     to allocate without bound fails in its worker, not the host.
     """
@@ -158,6 +158,7 @@ class WorkerPool:
         self.size = size
         self.warmup = warmup
         self.memory_limit = memory_limit
+        self._zygote = zygote_for(warmup)
         self._free: asyncio.Queue[_Worker] = asyncio.Queue()
         self._all: set[_Worker] = set()
         self._tasks: set[asyncio.Task[None]] = set()
@@ -178,19 +179,7 @@ class WorkerPool:
             return
         parent, child = socket.socketpair()
         with child:
-            process = subprocess.Popen(
-                [
-                    sys.executable,
-                    "-m",
-                    "server.workers",
-                    str(child.fileno()),
-                    self.warmup,
-                    str(self.memory_limit),
-                ],
-                pass_fds=(child.fileno(),),
-                stdin=subprocess.DEVNULL,
-                start_new_session=False,
-            )
+            process = self._zygote.fork(child.fileno(), self.memory_limit)
         worker = _Worker(process, Connection(parent.detach()))
         self._all.add(worker)
         task = asyncio.get_running_loop().create_task(self._await_ready(worker))
@@ -250,6 +239,7 @@ class WorkerPool:
             worker.process.kill()
         with contextlib.suppress(subprocess.TimeoutExpired):
             worker.process.wait(timeout=1.0)
+        worker.process.close()
         with contextlib.suppress(Exception):
             worker.conn.close()
 
@@ -291,6 +281,28 @@ class WorkerPool:
         finally:
             loop.remove_reader(fd)
 
+    async def _take(self, patience: float) -> _Worker:
+        """A free, live worker within ``patience`` [s] (:class:`ServiceBusy`).
+
+        A worker that died while idle (killed from outside, or its zygote with it) is replaced.
+        """
+        deadline = time.monotonic() + patience
+        while True:
+            try:
+                left = max(0.0, deadline - time.monotonic())
+                worker = await asyncio.wait_for(self._free.get(), left)
+            except TimeoutError:
+                raise ServiceBusy(
+                    f"no worker became free within {patience:g} s ({self.size} workers, all "
+                    "busy or starting); retry later"
+                ) from None
+            if worker.process.poll() is None:
+                return worker
+            log.warning(
+                "idle worker %s had exited (%s)", worker.process.pid, worker.process.returncode
+            )
+            self._replace(worker)
+
     async def run(
         self,
         fn: Callable[..., Any],
@@ -310,18 +322,15 @@ class WorkerPool:
         """
         patience = timeout if wait is None else wait
         asked = time.monotonic()
-        try:
-            worker = await asyncio.wait_for(self._free.get(), patience)
-        except TimeoutError:
-            raise ServiceBusy(
-                f"no worker became free within {patience:g} s ({self.size} workers, all busy "
-                "or starting); retry later"
-            ) from None
+        worker = await self._take(patience)
         waited = time.monotonic() - asked
         remaining = timeout if wait is not None else max(0.0, timeout - waited)
         finished = False
         try:
-            worker.conn.send((fn, args))
+            try:
+                worker.conn.send((fn, args))
+            except OSError:
+                raise WorkerFailed(f"worker died before {what} could start") from None
             if not await self._readable(worker.conn, remaining):
                 self.jobs_killed += 1
                 raise TimeBudgetExceeded(
@@ -333,7 +342,9 @@ class WorkerPool:
             try:
                 reply = await asyncio.to_thread(worker.conn.recv)
             except (EOFError, OSError):
-                code = worker.process.poll()
+                with contextlib.suppress(subprocess.TimeoutExpired):
+                    worker.process.wait(timeout=1.0)
+                code = worker.process.returncode
                 raise WorkerFailed(f"worker died during {what} (exit code {code})") from None
             finished = reply[0] != "memory"  # after a MemoryError, start afresh
         finally:
@@ -361,11 +372,3 @@ class WorkerPool:
 
 
 __all__ = ["WorkerPool"]
-
-
-if __name__ == "__main__":  # a worker: python -m server.workers FD [module:warmup [BYTES]]
-    _worker_main(
-        Connection(int(sys.argv[1])),
-        sys.argv[2] if len(sys.argv) > 2 else "",
-        int(sys.argv[3]) if len(sys.argv) > 3 else 0,
-    )

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import contextlib
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
+from pathlib import Path
 from typing import Any
 
 import httpx
@@ -74,3 +76,22 @@ def failed(client: TestClient | httpx.Client, submitted: httpx.Response, status:
     assert problem["status"] == status, problem
     assert problem["title"] and problem["detail"] and problem["type"]
     return dict(problem)
+
+
+def descendants(pid: int) -> list[int]:
+    """The processes below ``pid`` (children first), from Linux's /proc/PID/task/TID/children."""
+    found: list[int] = []
+    for task in Path(f"/proc/{pid}/task").glob("*"):
+        with contextlib.suppress(OSError):
+            for child in map(int, (task / "children").read_text().split()):
+                found += [child, *descendants(child)]
+    return found
+
+
+def is_running(pid: int) -> bool:
+    """Whether ``pid`` is a live process (a zombie waiting for its reaper is not)."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return False
+    return stat.rpartition(")")[2].split()[0] not in ("Z", "X")

@@ -5,11 +5,13 @@ from __future__ import annotations
 import asyncio
 import operator
 import os
+import signal
 import sqlite3
 import time
 from pathlib import Path
 
 import pytest
+from _server_support import is_running
 from pydantic import ValidationError
 
 from server.db import NewJob, NewPlan, PlanStore
@@ -217,7 +219,7 @@ def test_store_recovers_jobs_after_a_crash_and_after_a_clean_stop(tmp_path: Path
     kept = store.get_job(done.id)
     assert kept is not None and kept.state == "done"
     store.start_job(first.id)
-    assert store.requeue_running() == 1  # a clean stop: running goes back to the queue
+    assert store.requeueis_running() == 1  # a clean stop: running goes back to the queue
     back = store.get_job(first.id)
     assert back is not None and back.state == "queued" and back.started_at is None
     assert back.attempts == 1  # the run it started is still counted
@@ -276,12 +278,51 @@ def test_worker_pool_budget_busy_bugs_and_crashes() -> None:
             assert await pool.run(time.sleep, 0.3, timeout=0.5, wait=5, what="sleeping") is None
             await slow
             # A worker that dies mid-job is a bug (500) and is replaced.
-            with pytest.raises(WorkerFailed, match="died"):
+            with pytest.raises(WorkerFailed, match=r"died during exiting \(exit code 3\)"):
                 await pool.run(os._exit, 3, timeout=30, what="exiting")
             assert await pool.run(operator.mul, 6, 7, timeout=30, what="multiplying") == 42
         finally:
             await pool.close()
         assert pool.alive == 0
+
+    asyncio.run(scenario())
+
+
+# Evaluated in a worker: its parent's pid, its own, and whether synth's planner was imported
+# before the job.
+ABOUT_THE_WORKER = (
+    "(__import__('os').getppid(), __import__('os').getpid(),"
+    " 'synth.pipeline' in __import__('sys').modules)"
+)
+
+
+def test_workers_are_forks_of_one_warmed_zygote_and_die_with_it() -> None:
+    """Two pools with the server's warm-up share this process's zygote: their workers are its
+    children, with synth imported before their first job (a fresh interpreter has not imported
+    it, as the layer checks show). Killing the zygote kills its workers (PR_SET_PDEATHSIG); the
+    pool replaces the dead idle worker from a new zygote, and the job runs there."""
+    warm = "server.service:warm_up"
+
+    async def scenario() -> None:
+        first, second = WorkerPool(1, warmup=warm), WorkerPool(1, warmup=warm)
+        await first.start()
+        await second.start()
+        try:
+            zygote, a, warm_a = await first.run(eval, ABOUT_THE_WORKER, timeout=60, what="asking")
+            parent, b, warm_b = await second.run(eval, ABOUT_THE_WORKER, timeout=60, what="asking")
+            assert zygote == parent != os.getpid() and a != b and warm_a and warm_b
+            os.kill(zygote, signal.SIGKILL)
+            deadline = time.monotonic() + 10
+            while (is_running(a) or is_running(b)) and time.monotonic() < deadline:
+                await asyncio.sleep(0.05)
+            assert not is_running(a) and not is_running(b)
+            assert first.alive == second.alive == 0
+            again, c, warm_c = await first.run(eval, ABOUT_THE_WORKER, timeout=60, what="asking")
+            assert warm_c and again not in (zygote, os.getpid()) and c not in (a, b)
+        finally:
+            await first.close()
+            await second.close()
+        assert first.alive == second.alive == 0
 
     asyncio.run(scenario())
 

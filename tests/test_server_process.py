@@ -17,7 +17,7 @@ from pathlib import Path
 
 import httpx
 from _paths import ROOT, SEED_TASK
-from _server_support import YAML, done, finished
+from _server_support import YAML, descendants, done, finished, is_running
 
 STARTUP = 60.0  # [s] bound on the server's start (imports, worker warm-up)
 GOLDEN = (ROOT / "fixtures" / "golden" / "seed_4_8.al").read_text()
@@ -149,7 +149,15 @@ def test_a_served_database_lives_through_sigterm_and_kill_9(tmp_path: Path) -> N
         queued = client.post("/v1/replays", json=QUICK)  # one worker: it waits
         assert queued.status_code == 202
         assert client.get(queued.headers["location"]).json()["state"] == "queued"
+        deadline = time.monotonic() + STARTUP  # "running" may precede the worker's fork
+        while len(helpers := descendants(server.process.pid)) < 2 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert len(helpers) == 2, helpers  # the zygote and the busy worker
         server.stop(signal.SIGKILL)  # no shutdown: the running job's outcome is now unknown
+        deadline = time.monotonic() + 10  # they go with it: no orphan keeps a core
+        while any(map(is_running, helpers)) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not any(map(is_running, helpers)), helpers
     with running(db, *token, headers=auth) as (server, client):
         lost = client.get(long.headers["location"]).json()
         assert lost["state"] == "lost" and lost["finished_at"] is not None
