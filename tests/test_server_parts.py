@@ -219,7 +219,7 @@ def test_store_recovers_jobs_after_a_crash_and_after_a_clean_stop(tmp_path: Path
     kept = store.get_job(done.id)
     assert kept is not None and kept.state == "done"
     store.start_job(first.id)
-    assert store.requeueis_running() == 1  # a clean stop: running goes back to the queue
+    assert store.requeue_running() == 1  # a clean stop: running goes back to the queue
     back = store.get_job(first.id)
     assert back is not None and back.state == "queued" and back.started_at is None
     assert back.attempts == 1  # the run it started is still counted
