@@ -43,7 +43,7 @@ import sys
 import time
 import traceback
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from multiprocessing.connection import Connection
 from typing import Any
 
@@ -141,7 +141,6 @@ def _worker_main(conn: Connection, memory_limit: int = 0) -> None:
 class _Worker:
     process: ForkedProcess
     conn: Connection
-    started: float = field(default_factory=time.monotonic)
 
 
 class WorkerPool:
@@ -156,7 +155,6 @@ class WorkerPool:
 
     def __init__(self, size: int, warmup: str = "", memory_limit: int = 0) -> None:
         self.size = size
-        self.warmup = warmup
         self.memory_limit = memory_limit
         self._zygote = zygote_for(warmup)
         self._free: asyncio.Queue[_Worker] = asyncio.Queue()

@@ -1,10 +1,11 @@
 """A warmed-up interpreter that forks the server's worker processes.
 
-A fresh worker interpreter spends about 1.6 s (on a 2-core machine) importing numpy, scipy,
-Pinocchio, Coal and synth before it can take a job, and the pool pays that again for every worker
-it replaces after an overrun, a cancellation, a crash or a ``MemoryError``. The zygote pays it
-once: ``python -m server.zygote FD WARMUP`` imports (``WARMUP``, a ``module:function``), then
-forks one worker per request. A fork shares the warmed pages and is ready in milliseconds.
+A fresh worker interpreter spends about 1 s (``benchmarks/workers.py``, 2-core machine) importing
+numpy, scipy, Pinocchio, Coal and synth before it can take a job, and the pool pays that again
+for every worker it replaces after an overrun, a cancellation, a crash or a ``MemoryError``. The
+zygote pays it once: ``python -m server.zygote FD WARMUP`` imports (``WARMUP``, a
+``module:function``), then forks one worker per request. A fork shares the warmed pages and is
+ready in about 5 ms.
 
 The zygote is a fresh, single-threaded interpreter (never a fork of the threaded server), so a
 fork of it is as safe as ``multiprocessing``'s ``forkserver``, which this follows; unlike the
