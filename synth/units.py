@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import math
 import re
-from functools import cache
+from functools import cache, lru_cache
 from typing import Any, Final, Literal
 
 import pint
@@ -182,6 +182,17 @@ def parse_quantity(text: object, dim: Dimension) -> float:
         )
     if not isinstance(text, str):
         raise UnitError(f"expected a quantity string like '3.85 cm', got {type(text).__name__}")
+    return _parse_text(text, dim)
+
+
+@lru_cache(maxsize=4096)
+def _parse_text(text: str, dim: Dimension) -> float:
+    """:func:`parse_quantity` of a string, kept for the next call with the same text.
+
+    A task's few quantity strings are read again by every load of the task and of the Stanford
+    arm's parameters, at ~80 µs each through pint. The value is a float and a refusal raises
+    afresh (``lru_cache`` keeps no exceptions), so a cached call is the uncached one.
+    """
     ureg = registry()
     q = read_quantity(text)
     if q.unitless and dim != "dimensionless":

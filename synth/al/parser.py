@@ -321,12 +321,28 @@ def _lark() -> Lark:
 def parse_program(text: str, *, filename: str = "<al>") -> ast.Program:
     """Parse AL source ``text`` into an :class:`~synth.al.ast.Program`.
 
+    The last few programs parsed are kept (:func:`_parsed`): a program is parsed again by each
+    stage that takes its text (the emitter's check, the nominal replay, the proof, the
+    service), and the tree is immutable (frozen nodes, tuples), so a kept tree is a fresh one.
+
     Raises:
         ALSyntaxError: the text is not AL; the error names file, line, column, a caret
             context and what the grammar expected there. Also for a number literal too large
             for a float (309 digits) and for a program nested more than
             :data:`~synth.al.ast.MAX_NESTING` levels deep.
     """
+    if len(text) > _KEPT_TEXT:
+        return _parse(text, filename)
+    return _parsed(text, filename)
+
+
+_KEPT_TEXT = 1 << 16
+"""[characters] The longest program whose tree is kept: synth's own programs are a few kB, and
+a megabyte of hostile text must not leave its tree (tens of MB) behind in a server process."""
+
+
+def _parse(text: str, filename: str) -> ast.Program:
+    """:func:`parse_program` itself."""
     # A lone CR ends a line for editors but not for lark's line counter, whose columns would
     # then be offsets into the whole text; one character for one keeps every position.
     text = _LONE_CR.sub("\n", text)
@@ -355,6 +371,9 @@ def parse_program(text: str, *, filename: str = "<al>") -> ast.Program:
             filename=filename,
         )
     return replace(program, filename=filename) if filename != program.filename else program
+
+
+_parsed = functools.lru_cache(maxsize=32)(_parse)  # a syntax error is raised afresh, not kept
 
 
 # --------------------------------------------------------------------------------------------

@@ -30,7 +30,6 @@ from typing import Any
 import coal
 import numpy as np
 import pinocchio as pin
-import yaml
 from numpy.typing import ArrayLike, NDArray
 from pydantic import ValidationError
 
@@ -41,6 +40,7 @@ from synth.models.arm.hand import hand_bodies, palm_top
 from synth.models.arm.limits import JointKind, JointLimits
 from synth.models.graph import pose_to_se3
 from synth.models.spec import HandSpec, Pose
+from synth.models.yamlread import read_yaml
 from synth.units import parse_quantity, rate_si
 
 STANFORD_PARAMETERS_PATH: Path = (
@@ -115,10 +115,14 @@ def load_stanford_parameters(path: Path | str | None = None) -> StanfordParamete
     """Read a Stanford arm parameter file (default: ``fixtures/arms/stanford.yaml``)."""
     source = Path(path) if path is not None else STANFORD_PARAMETERS_PATH
     try:
-        raw = yaml.safe_load(source.read_text())
-    except (OSError, yaml.YAMLError) as exc:
+        raw = read_yaml(source.read_text(encoding="utf-8"), source=str(source)).data
+    except (OSError, UnicodeDecodeError) as exc:
         raise ArmModelError(
             f"cannot read the Stanford arm parameters: {exc}", str(source)
+        ) from None
+    except SynthError as exc:  # the task loader's limits and messages (line of the slip)
+        raise ArmModelError(
+            f"cannot read the Stanford arm parameters: {exc.message}", str(source)
         ) from None
     where = str(source)
     try:
