@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 
 from _paths import TASKS
@@ -37,8 +38,19 @@ def synthesized(task: Path | TaskSpec, trials: int = 0, seed: int = 0) -> Synthe
     """The pipeline's proven program for ``task`` with a proof of ``trials`` (one process).
 
     The proof of ``trials`` at the default 0.99 allows no failure below 100 trials, so a test
-    that asserts ``attempts == 1`` says the planner's first choice was the proven one.
+    that asserts ``attempts == 1`` says the planner's first choice was the proven one. A task
+    file's synthesis is kept for the other tests of the process (a frozen record; several
+    tests start from the seed's program).
     """
+    if isinstance(task, Path):
+        return _synthesized_file(task.resolve(), trials, seed)
+    return _synthesize(task, trials, seed)
+
+
+def _synthesize(task: Path | TaskSpec, trials: int, seed: int) -> Synthesis:
     options = SynthesisOptions(proof=ProofOptions(trials=trials, seed=seed, workers=1))
     base_dir = TASKS if isinstance(task, TaskSpec) else None
     return synthesize(task, options, base_dir=base_dir)
+
+
+_synthesized_file = functools.cache(_synthesize)

@@ -137,6 +137,15 @@ def body_at_opening(arm: Arm, body: Body, opening: float) -> Body:
     return Body(body.name, body.joint, body.link, placement, body.geometry, body.role)
 
 
+def _min_distances(results: Any) -> NDArray[np.float64]:
+    """Every pair's ``min_distance`` [m] out of Pinocchio's ``distanceResults``, in pair order.
+
+    One list built by iterating the vector: about twice as fast as indexing it pair by pair
+    (each index builds a new Python wrapper), and the planner's sweeps read it at every step.
+    """
+    return np.array([result.min_distance for result in results], dtype=float)
+
+
 class CollisionScene:
     """Arm + hand + held object + environment, with the checked pair set fixed at construction.
 
@@ -361,10 +370,7 @@ class CollisionScene:
         pin.computeDistances(
             self.model, self.data, self.geometry_model, self.geometry_data, self._q(q)
         )
-        results = self.geometry_data.distanceResults
-        return np.fromiter(
-            (results[k].min_distance for k in range(len(self.pairs))), float, len(self.pairs)
-        )
+        return _min_distances(self.geometry_data.distanceResults)
 
     def distance_bounds(
         self, q: ArrayLike, exact_below: float | NDArray[np.float64] = 0.0
@@ -379,9 +385,7 @@ class CollisionScene:
         """
         qa = self._q(q)
         pin.computeDistances(self.model, self.data, self.bound_model, self.bound_data, qa)
-        results = self.bound_data.distanceResults
-        n = len(self.pairs)
-        d = np.fromiter((results[k].min_distance for k in range(n)), float, n)
+        d = _min_distances(self.bound_data.distanceResults)
         recheck = np.flatnonzero((d <= exact_below) & ~self._bound_is_exact)
         self._exact_last = set(recheck.tolist())
         if recheck.size:
