@@ -669,3 +669,22 @@ def test_round_trip_expressions(tree: ast.Expr) -> None:
 def test_round_trip_programs(tree: ast.Program) -> None:
     text = format_program(tree)
     assert shape(parse(text)) == tree, text
+
+
+def test_a_kept_tree_is_the_fresh_one_and_errors_are_raised_each_time() -> None:
+    """parse_program keeps recent trees (synth/al/parser.py): a kept tree must be the one a
+    fresh parse gives, under the file name asked for, and a syntax error must not be kept."""
+    text = (DATA_AL / "seed_4_8_search.al").read_text(encoding="utf-8")
+    first = parse_program(text, filename="a.al")
+    again = parse_program(text, filename="b.al")
+    assert (first.filename, again.filename) == ("a.al", "b.al")
+    assert format_program(first) == format_program(again)
+    broken = text.replace("MOVE", "MOVE MOVE", 1)
+    line = next(n for n, row in enumerate(text.splitlines(), 1) if "MOVE" in row)
+    for _ in range(2):
+        with pytest.raises(ALSyntaxError) as caught:
+            parse_program(broken, filename="c.al")
+        assert caught.value.line == line
+    # A text past the kept length parses the same way (uncached): 70 k characters of comment.
+    long = text + "\n{" + "x" * 70_000 + "}\n"
+    assert format_program(parse_program(long)) == format_program(first)
