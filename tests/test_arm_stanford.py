@@ -4,12 +4,14 @@ trips, the parameter file's sources, and the base placement for the seed's workc
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
 from _paths import SEED_TASK
 
+from synth.exceptions import ArmModelError
 from synth.models.arm import (
     build_stanford_arm,
     load_arm,
@@ -283,3 +285,16 @@ def test_tool_offset_and_rate_overrides_from_the_task_spec():
     assert np.allclose(arm.forward(q).homogeneous, t6 @ offset.homogeneous, atol=1e-14)
     solutions = arm.inverse(arm.forward(q))
     assert min(float(np.max(np.abs(s - q))) for s in solutions) < 1e-9
+
+
+def test_an_unreadable_parameter_file_is_named_once_with_the_line(tmp_path: Path) -> None:
+    """The parameter file goes through the task loader (synth/models/yamlread.py): a syntax
+    slip is reported with its file and line, a missing file with its file."""
+    broken = tmp_path / "arm.yaml"
+    broken.write_text("kinematics:\n  S1: {source: L960\njoints: []\n", encoding="utf-8")
+    with pytest.raises(ArmModelError) as caught:
+        load_stanford_parameters(broken)
+    message = str(caught.value)
+    assert message.count(str(broken)) == 1 and "(line " in message, message
+    with pytest.raises(ArmModelError, match="No such file"):
+        load_stanford_parameters(tmp_path / "missing.yaml")

@@ -33,7 +33,7 @@ import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 from pydantic import ValidationError
 
-from synth.exceptions import ArmModelError, SynthError
+from synth.exceptions import ArmModelError, SpecError, SynthError
 from synth.models.arm.arm import Arm
 from synth.models.arm.bodies import Body, box_at, cylinder_along
 from synth.models.arm.hand import hand_bodies, palm_top
@@ -120,9 +120,10 @@ def load_stanford_parameters(path: Path | str | None = None) -> StanfordParamete
         raise ArmModelError(
             f"cannot read the Stanford arm parameters: {exc}", str(source)
         ) from None
-    except SynthError as exc:  # the task loader's limits and messages (line of the slip)
+    except SpecError as exc:  # the task loader's limits and messages, with the slip's line
+        line = f" (line {exc.line})" if exc.line is not None else ""
         raise ArmModelError(
-            f"cannot read the Stanford arm parameters: {exc.message}", str(source)
+            f"cannot read the Stanford arm parameters{line}: {exc.detail}", str(source)
         ) from None
     where = str(source)
     try:
