@@ -52,6 +52,7 @@ from numpy.typing import NDArray
 
 from synth.models.arm import CollisionScene, SweepOptions, SweepResult
 from synth.models.arm.bodies import bounding_radius
+from synth.models.arm.collision import min_distances
 from synth.replay.bounds import ArmChain, curvatures
 from synth.replay.contact import GJK_MARGIN
 
@@ -197,8 +198,7 @@ class Ends:
         data = scene.data
         pin.computeJointJacobians(scene.model, data, q)
         pin.computeDistances(scene.model, data, scene.bound_model, scene.bound_data, q)
-        results = scene.bound_data.distanceResults
-        d = np.fromiter((r.min_distance for r in results), float, len(results))
+        d = min_distances(scene.bound_data.distanceResults)
         motion = PairMotion.of(scene)
         recheck = np.flatnonzero((d <= exact_below) & ~motion.exact)
         if recheck.size:

@@ -137,11 +137,12 @@ def body_at_opening(arm: Arm, body: Body, opening: float) -> Body:
     return Body(body.name, body.joint, body.link, placement, body.geometry, body.role)
 
 
-def _min_distances(results: Any) -> NDArray[np.float64]:
+def min_distances(results: Any) -> NDArray[np.float64]:
     """Every pair's ``min_distance`` [m] out of Pinocchio's ``distanceResults``, in pair order.
 
     One list built by iterating the vector: about twice as fast as indexing it pair by pair
-    (each index builds a new Python wrapper), and the planner's sweeps read it at every step.
+    (each index builds a new Python wrapper); the planner's sweeps and the referee's read it at
+    every step.
     """
     return np.array([result.min_distance for result in results], dtype=float)
 
@@ -370,7 +371,7 @@ class CollisionScene:
         pin.computeDistances(
             self.model, self.data, self.geometry_model, self.geometry_data, self._q(q)
         )
-        return _min_distances(self.geometry_data.distanceResults)
+        return min_distances(self.geometry_data.distanceResults)
 
     def distance_bounds(
         self, q: ArrayLike, exact_below: float | NDArray[np.float64] = 0.0
@@ -385,7 +386,7 @@ class CollisionScene:
         """
         qa = self._q(q)
         pin.computeDistances(self.model, self.data, self.bound_model, self.bound_data, qa)
-        d = _min_distances(self.bound_data.distanceResults)
+        d = min_distances(self.bound_data.distanceResults)
         recheck = np.flatnonzero((d <= exact_below) & ~self._bound_is_exact)
         self._exact_last = set(recheck.tolist())
         if recheck.size:
