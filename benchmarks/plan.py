@@ -14,7 +14,7 @@ import argparse
 import statistics
 from pathlib import Path
 
-from synth.exceptions import SpecError, SynthError
+from synth.exceptions import SynthError
 from synth.models.loader import load_task
 from synth.pipeline import SynthesisOptions, synthesize
 from synth.replay.proof import ProofOptions
@@ -66,8 +66,7 @@ def main() -> None:
                 bf_time, bf = timed(spec, args.repeat, try_harder=harder)
             except SynthError as exc:  # no insertion, or objects its contacts do not locate
                 if not harder:
-                    detail = exc.detail if isinstance(exc, SpecError) else exc.message
-                    print(f"{path.stem:28}not plannable: {detail}")
+                    print(f"{path.stem:28}not plannable: {exc}")
                 break
             ex_time, ex = timed(spec, args.repeat, try_harder=harder, exhaustive=True)
             same = bf.strategy.name == ex.strategy.name
