@@ -323,7 +323,10 @@ class CollisionScene:
         self.bound_data = self.bound_model.createData()
         if held is not None:
             index = {b.name: i for i, b in enumerate(self.bodies)}
-            self.body_bounds = body_motion_bounds(self.model, self.arm.limits, self.bodies)
+            held_rows = [i for i, b in enumerate(self.bodies) if b.role == "held"]
+            self.body_bounds = body_motion_bounds(
+                self.model, self.arm.limits, self.bodies, rows=held_rows, base=self.body_bounds
+            )
             self.pair_bounds = pair_motion_bounds(
                 self.model,
                 self.bodies,

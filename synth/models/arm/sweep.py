@@ -48,38 +48,57 @@ if TYPE_CHECKING:
 
 
 def body_motion_bounds(
-    model: pin.Model, limits: JointLimits, bodies: Sequence[Body]
+    model: pin.Model,
+    limits: JointLimits,
+    bodies: Sequence[Body],
+    *,
+    rows: Sequence[int] | None = None,
+    base: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
     """ρ [m/rad | 1]: bound on |∂p/∂q_j| over every point p of each body and every q.
 
     Shape (bodies, joints); zero for joints not supporting the body. See the module docstring.
+    ``rows`` and ``base``: only those bodies' rows anew, the others copied from ``base`` (a
+    reposition moves only the held object; its rows are computed as a full call would).
     """
-    n = model.nv
     reach = np.array(
         [
             max(abs(lo), abs(hi)) if kind == "prismatic" else 0.0
             for lo, hi, kind in zip(limits.lower, limits.upper, limits.kinds, strict=True)
         ]
     )
-    rho = np.zeros((len(bodies), n))
-    for row, body in enumerate(bodies):
-        if body.joint == 0:
-            continue
-        radius = bounding_radius(body.geometry, body.placement)
-        chain = [j for j in model.supports[body.joint] if j != 0]
-        for pos, j in enumerate(chain):
-            col = model.joints[j].idx_v
-            if limits.kinds[col] == "prismatic":
-                rho[row, col] = 1.0
-                continue
-            lever = radius
-            for i in chain[pos + 1 :]:
-                lever += (
-                    float(np.linalg.norm(model.jointPlacements[i].translation))
-                    + reach[model.joints[i].idx_v]
-                )
-            rho[row, col] = lever
+    if rows is None or base is None:
+        rho = np.zeros((len(bodies), model.nv))
+        rows = range(len(bodies))
+    else:
+        rho = np.array(base, dtype=float)
+    for row in rows:
+        rho[row] = _body_row(model, limits, reach, bodies[row])
     return rho
+
+
+def _body_row(
+    model: pin.Model, limits: JointLimits, reach: NDArray[np.float64], body: Body
+) -> NDArray[np.float64]:
+    """One body's row of :func:`body_motion_bounds`."""
+    row = np.zeros(model.nv)
+    if body.joint == 0:
+        return row
+    radius = bounding_radius(body.geometry, body.placement)
+    chain = [j for j in model.supports[body.joint] if j != 0]
+    for pos, j in enumerate(chain):
+        col = model.joints[j].idx_v
+        if limits.kinds[col] == "prismatic":
+            row[col] = 1.0
+            continue
+        lever = radius
+        for i in chain[pos + 1 :]:
+            lever += (
+                float(np.linalg.norm(model.jointPlacements[i].translation))
+                + reach[model.joints[i].idx_v]
+            )
+        row[col] = lever
+    return row
 
 
 def pair_motion_bounds(
@@ -89,18 +108,15 @@ def pair_motion_bounds(
     rho: NDArray[np.float64],
 ) -> NDArray[np.float64]:
     """Per pair, the row m with |Δd| ≤ m·|Δq|: joints moving one body but not the other."""
-    n = model.nv
-    support = []
-    for body in bodies:
-        mask = np.zeros(n, dtype=bool)
+    support = np.zeros((len(bodies), model.nv), dtype=bool)
+    for p, body in enumerate(bodies):
         for j in model.supports[body.joint]:
             if j != 0:
-                mask[model.joints[j].idx_v] = True
-        support.append(mask)
-    out = np.zeros((len(pairs), n))
-    for k, (a, b) in enumerate(pairs):
-        out[k] = rho[a] * ~support[b] + rho[b] * ~support[a]
-    return out
+                support[p, model.joints[j].idx_v] = True
+    if not pairs:
+        return np.zeros((0, model.nv))
+    a, b = np.array(pairs, dtype=np.int64).reshape(-1, 2).T
+    return rho[a] * ~support[b] + rho[b] * ~support[a]
 
 
 @dataclass(frozen=True)
