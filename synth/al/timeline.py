@@ -60,6 +60,7 @@ from synth.al.motions import (
     TorqueMonitor,
     relation_holds,
 )
+from synth.vec3 import cross3
 
 __all__ = [
     "Checkpoint",
@@ -149,7 +150,7 @@ def ramp_levels(
     A force monitor watches ``direction · (L·n)``; a torque monitor ``axis · (lever × L·n)``.
     """
     levels = set()
-    moment = np.cross(lever, normal)
+    moment = cross3(lever, normal)
     for m in monitors:
         if isinstance(m, ForceMonitor):
             per_newton = float(np.dot(m.direction, normal))
@@ -265,7 +266,7 @@ class Timeline:
         if checkpoint.level is None:
             return _ZERO3, _ZERO3, opening
         force = checkpoint.level * self.normal
-        return force, np.cross(self.lever, force), opening
+        return force, cross3(self.lever, force), opening
 
     def seal(self) -> None:
         """Order the checkpoints: by instant, plain ones before the contact levels, rising."""
@@ -359,7 +360,7 @@ class TimelineMachine(MotionGate, Generic[M]):
             self._force, self._torque = _ZERO3.copy(), _ZERO3.copy()
         else:
             self._force = level * motion.normal
-            self._torque = np.cross(motion.lever, self._force)
+            self._torque = cross3(motion.lever, self._force)
 
     def resume(self) -> MotionResult:
         """Continue the paused motion."""

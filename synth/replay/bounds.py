@@ -53,6 +53,7 @@ from numpy.typing import NDArray
 
 from synth.models.arm import Arm
 from synth.replay.motion import Segment
+from synth.vec3 import cross3
 
 __all__ = ["ArmChain", "PinExtent", "PinFlight", "curvatures", "safe_step"]
 
@@ -297,4 +298,4 @@ class PinFlight:
 
     def point_rate(self, point: NDArray[np.float64], direction: NDArray[np.float64]) -> float:
         """d/ds of direction·(a pin point now at world ``point``), without the error's part."""
-        return float(direction @ (self.velocity + np.cross(self.omega, point - self.origin)))
+        return float(direction @ (self.velocity + cross3(self.omega, point - self.origin)))

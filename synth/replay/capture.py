@@ -73,6 +73,7 @@ from numpy.typing import NDArray
 
 from synth.models.spec import DEFAULT_FRICTION
 from synth.models.workcell import HoleSite, PinModel
+from synth.vec3 import cross3
 
 __all__ = [
     "EntryContact",
@@ -96,6 +97,8 @@ _TANGENT = 1e-2
 """[1] sin of the angle below which an edge of the pin and the rim count as tangent."""
 _TIE = 1e-8
 """[m] a drop onto the face or into the mouth within this of the rim's is a rim contact."""
+_ZHAT = np.array([0.0, 0.0, 1.0])
+"""ẑ, the mouth frame's axis."""
 
 
 @dataclass(frozen=True)
@@ -162,10 +165,10 @@ class _Solid:
         self.c, self.u = c, u
         self.a, self.b = model.radius_at(0.0), model.radius
         self.h, self.length = model.shape.tip_taper_length, model.length
-        e1 = np.cross(np.array([0.0, 0.0, 1.0]), u)
+        e1 = cross3(_ZHAT, u)
         norm = float(np.linalg.norm(e1))
         e1 = e1 / norm if norm > 1e-12 else np.array([1.0, 0.0, 0.0])
-        self.e1, self.e2 = e1, np.cross(u, e1)
+        self.e1, self.e2 = e1, cross3(u, e1)
 
     def rims(self) -> list[tuple[float, float]]:
         """(height along the axis, radius) of the tip rim, the taper's top and the head rim."""
@@ -224,7 +227,7 @@ class _Solid:
             return [-self.u], False
         else:
             return [np.asarray(taper if height < self.h else e_r)], False
-        common = np.cross(np.cross(self.u, e_r), rim_tangent)
+        common = cross3(cross3(self.u, e_r), rim_tangent)
         norm = float(np.linalg.norm(common))
         if norm <= _TANGENT:
             return list(cone), True

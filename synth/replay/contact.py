@@ -58,6 +58,7 @@ from synth.models.workcell import HoleSite, PinModel
 from synth.replay.bounds import PinFlight, safe_step
 from synth.replay.capture import TipPlacement, captures, seat_depth, tip_placement
 from synth.replay.wedging import wedges
+from synth.vec3 import cross3
 
 __all__ = [
     "GuidedEnd",
@@ -566,7 +567,7 @@ def _mouth_guard(
         return h
     index = np.flatnonzero(risky)
     tip = np.asarray(pose.translation)
-    velocity = flight.velocity + np.cross(flight.omega, tip - flight.origin)
+    velocity = flight.velocity + cross3(flight.omega, tip - flight.origin)
     rates = mouths.axes[index] @ velocity  # the tip centre's height rate, less the blend
     above = safe_steps(axial[index], -(rates - flight.blend), curvature)
     falling = rates + flight.blend
