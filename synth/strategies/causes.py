@@ -45,6 +45,9 @@ _PATTERNS: tuple[tuple[str, re.Pattern[str]], ...] = tuple(
     for cause, pattern in (
         ("pruned", r"^pruned:"),
         ("proof", r"\breplay\b|\bproof\b"),
+        # A gross motion's sweep names the moving body, which may be a finger or the tapping
+        # pin: the sweep itself is the cause, whatever the words it names (clearance.py).
+        ("collision", r"\bsweeps \S+ into\b|\bobstructed\b"),
         ("fit", r"does not fit|\bjam|\bwedg"),
         ("tilt", r"\btilt\b"),
         ("footprint", r"error footprint|search of about"),

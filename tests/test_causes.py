@@ -1,0 +1,79 @@
+"""A rejection's cause is read from its wording: the wordings synth writes, each to its cause."""
+
+from __future__ import annotations
+
+import pytest
+
+from synth.strategies.causes import classify, root_cause
+from synth.strategies.records import Rejection
+
+# Wordings as synth/strategies/clearance.py, grasp.py, approach.py and fine.py write them.
+SWEEP = (
+    "the {motion} sweeps {body} into {obstacle} (they come 1.21 cm apart; 6.79 cm are needed: "
+    "0.10 cm clearance and their uncertainty; hand at (44.97, 110.72, 4.84) cm; AL moves are "
+    "joint-interpolated)"
+)
+
+
+@pytest.mark.parametrize(
+    ("reason", "cause"),
+    [
+        # A finger swept into an obstacle on the way to the grasp is an obstruction, not a
+        # grasp the hand cannot make (it was "grasp" while "finger" was matched first).
+        (
+            SWEEP.format(
+                motion="move from BPARK to the grasp's approach point",
+                body="finger_left",
+                obstacle="BLK",
+            ),
+            "collision",
+        ),
+        (
+            SWEEP.format(
+                motion="move from BPARK to the grasp's approach point", body="palm", obstacle="BLK"
+            ),
+            "collision",
+        ),
+        # A tap's sweep was "tap" (the word in its motion's name).
+        (SWEEP.format(motion="tap on PLATET", body="PIN1", obstacle="FIXTURE"), "collision"),
+        (
+            "every φ is obstructed; the quickest: "
+            + SWEEP.format(motion="transport", body="finger_right", obstacle="PLATE"),
+            "collision",
+        ),
+        # The grasp's own geometric checks stay grasp problems.
+        (
+            "pin may be 0.61 cm across from the finger pads' centres, the pads reach 0.50 cm "
+            "(CENTER registers the hand along the fingers only)",
+            "grasp",
+        ),
+        (
+            "the fingers may close 0.40 cm off the grasp distance 3.54 cm, off the pin's shaft "
+            "(0.40–8.00 cm from the tip)",
+            "grasp",
+        ),
+        (
+            "error footprint ±5.3 cm × ±5.3 cm against Δr_ok = 0.525 cm needs a search of about "
+            "3e+04 points (more than 20000)",
+            "footprint",
+        ),
+        ("replay proof failed: 8 of 10 trials succeeded", "proof"),
+        ("no arm solution at the grasp's approach point", "reach"),
+    ],
+)
+def test_each_wording_names_its_cause(reason: str, cause: str) -> None:
+    assert classify(reason) == cause
+
+
+def test_a_finger_sweep_at_pickup_is_a_root_cause_trying_harder_may_help() -> None:
+    finger = SWEEP.format(
+        motion="move from BPARK to the grasp's approach point", body="finger_left", obstacle="BLK"
+    )
+    rejections = [
+        Rejection("ω=0° γ=100°", "no arm solution at the grasp's approach point", stage="pickup"),
+        Rejection("ω=225° γ=100°", finger, stage="pickup"),
+        Rejection("ω=270° γ=100°", finger, stage="pickup"),
+    ]
+    root = root_cause(rejections)
+    assert (root.cause, root.count, root.of) == ("collision", 2, 3)
+    assert root.helped_by_trying_harder  # keeping every ω may find one whose path is clear
