@@ -211,7 +211,7 @@ def test_search_pattern_of_l2743() -> None:
         probe = rng.uniform([-dx * CM, -dy * CM], [dx * CM, dy * CM], size=(5000, 2))
         dist = np.linalg.norm(probe[:, None] - tried[None], axis=2).min(axis=1)
         assert dist.max() <= 0.762 * CM
-        assert coverage(pts, dx * CM, dy * CM, margin) >= dist.max()
+        assert coverage(pts, dx * CM, dy * CM, margin, within=0.762 * CM) >= dist.max()
     search = plan_search(1.58 * CM, 1.15 * CM, 1.05, 0.762 * CM, 0.2, PlanOptions())
     assert (search.rings, search.expected_points) == (3, 7)
     assert search.time == pytest.approx(7 * 0.2)

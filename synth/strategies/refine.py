@@ -29,6 +29,7 @@ import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from synth.al.interpreter import MAX_TIME
 from synth.errors.chain import chain_between
 from synth.errors.estimate import RelationModel, estimate_errors
 from synth.models.spec import WORLD
@@ -40,7 +41,12 @@ from synth.strategies.footprint import estimate_footprint, footprint_tables
 from synth.strategies.hypotheses import Accuracy, Tapped
 from synth.strategies.records import PinInHoleStrategy, Rejection
 from synth.strategies.relations import approach_relation, hole_only_relation
-from synth.strategies.search import plan_search, points_within_box, search_size_problem
+from synth.strategies.search import (
+    plan_search,
+    points_within_box,
+    search_size_problem,
+    search_time_problem,
+)
 from synth.strategies.tapping import plan_tap
 from synth.units import DEG
 
@@ -165,6 +171,10 @@ def refine(ctx: PlanContext, cand: Candidate) -> Refined | Rejection:
         if too_large is not None:
             return Rejection(cand.name, too_large)
         search = plan_search(fp.dx, fp.dy, fp.zeta, ins.dr_ok, cand.try_time, opts)
+        other_time = cand.strategy.gross_time + (0.0 if tap is None else tap.time)
+        too_long = search_time_problem(search, cand.try_time, other_time, MAX_TIME)
+        if too_long is not None:
+            return Rejection(cand.name, too_long)
         decisions.append(
             f"search: error footprint ±{_cm(fp.dx)} × ±{_cm(fp.dy)} (ζ = {_deg(fp.zeta)}) "
             f"exceeds Δr_ok = {_cm(ins.dr_ok)}; {search.rings} rings of {_cm(search.step)}, "

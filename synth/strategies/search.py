@@ -8,8 +8,8 @@ from ``W = 0`` while ``W < 2π`` (the OCR's "259°DEG" at L2755 is 2π), and kee
 Rings: the seed's program stops at ``R ≤ 1.72 = 3·step`` for Δx = 1.58 cm (L2753), i.e.
 ``ceil(max(Δx, Δy)/step)`` rings; we start there and add rings (and if need be widen the filter,
 :func:`search_extent`) until every point of the footprint lies within Δr_ok of a tried offset
-(the first attempt at the origin included), checked on a grid with the grid's half-diagonal
-added so the check is conservative.
+(the first attempt at the origin included), checked on cells with each cell's half-diagonal
+added so the check is conservative (:func:`coverage`).
 
 Expected time (L2436): "we only count those points within Δx/2 and Δy/2 of the hole", each
 costing one retry (``Candidate.try_time``).
@@ -26,8 +26,10 @@ from scipy.spatial import cKDTree
 from synth.strategies.options import PlanOptions
 from synth.strategies.records import Search
 
-GRID = 41
-"""Grid points per side for the coverage check."""
+GRID = 40
+"""Cells per side of the coverage check's first grid (:func:`coverage`)."""
+SPLITS = 8
+"""Halvings of a coverage cell at most: cells down to 1/10 240 of the footprint's side."""
 MAX_POINTS = 20_000
 """Largest search pattern planned: beyond this (Δr_ok tiny against the footprint) the planner
 rejects the strategy instead of generating, checking and timing a pattern it would never run."""
@@ -53,19 +55,43 @@ def inside(points: NDArray[np.float64], dx: float, dy: float) -> NDArray[np.bool
     return (np.abs(points[:, 0]) <= dx) & (np.abs(points[:, 1]) <= dy)
 
 
-def coverage(points: NDArray[np.float64], dx: float, dy: float, margin: float = 0.0) -> float:
+def coverage(
+    points: NDArray[np.float64], dx: float, dy: float, margin: float = 0.0, *, within: float
+) -> float:
     """Upper bound [m] of the distance from any footprint point to the nearest tried offset.
 
     Tried offsets: the origin and the pattern points that pass the filter ``|x| ≤ dx + margin``,
-    ``|y| ≤ dy + margin``. The maximum over a ``GRID × GRID`` grid of the footprint ±dx × ±dy,
-    plus the grid's half-diagonal.
+    ``|y| ≤ dy + margin``. The distance to a point set is 1-Lipschitz, so over a cell of centre
+    c and half-diagonal r it is at most d(c) + r. Start from ``GRID × GRID`` cells over the
+    footprint ±dx × ±dy and split in four every cell whose bound exceeds ``within``, until every
+    bound is within it, a centre itself is farther than ``within`` (the footprint is not
+    covered: no split can help), or the cells are :data:`SPLITS` halvings deep. The result is
+    the largest bound of the cells kept: ≤ ``within`` exactly when coverage within it is proven.
+
+    A fixed grid's half-diagonal grows with the footprint: at 41 × 41 it is ``hypot(dx, dy)/40``,
+    which for a ±5 cm footprint (±3 in hand placement) exceeds the slack between a pattern's
+    true coverage (≈ 0.7·Δr_ok at step 0.75·Δr_ok) and Δr_ok, so no pattern would ever pass.
     """
     tried = np.vstack([np.zeros((1, 2)), points[inside(points, dx + margin, dy + margin)]])
-    xs, ys = np.linspace(-dx, dx, GRID), np.linspace(-dy, dy, GRID)
-    grid = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)
-    d, _ = cKDTree(tried).query(grid)
-    half_diagonal = 0.5 * math.hypot(2 * dx / (GRID - 1), 2 * dy / (GRID - 1))
-    return float(d.max()) + half_diagonal
+    tree = cKDTree(tried)
+    hx, hy = dx / GRID, dy / GRID  # [m] half-sides of the first cells
+    edges_x = -dx + (2 * np.arange(GRID) + 1) * hx
+    edges_y = -dy + (2 * np.arange(GRID) + 1) * hy
+    centres = np.stack(np.meshgrid(edges_x, edges_y), axis=-1).reshape(-1, 2)
+    worst = 0.0
+    for depth in range(SPLITS + 1):
+        d, _ = tree.query(centres)
+        bound = d + math.hypot(hx, hy)
+        if float(d.max()) > within or depth == SPLITS:
+            return max(worst, float(bound.max()))
+        loose = bound > within
+        if not loose.any():
+            return max(worst, float(bound.max()))
+        worst = max(worst, float(bound[~loose].max(initial=0.0)))
+        hx, hy = hx / 2, hy / 2
+        quarters = np.array([[-hx, -hy], [hx, -hy], [-hx, hy], [hx, hy]])
+        centres = (centres[loose][:, None, :] + quarters[None]).reshape(-1, 2)
+    raise AssertionError("unreachable: the last depth returns")
 
 
 def pattern_size(step: float, rings: int) -> int:
@@ -121,9 +147,39 @@ def search_extent(dx: float, dy: float, dr_ok: float, step: float) -> tuple[int,
         last = max(first, math.ceil((math.hypot(dx, dy) + margin) / step)) + 1
         for rings in range(first, last + 1):
             points = pattern_points(step, rings)
-            if coverage(points, dx, dy, margin) <= dr_ok:
+            if coverage(points, dx, dy, margin, within=dr_ok) <= dr_ok:
                 return rings, margin
     raise ValueError(f"no search pattern of step {step} m covers {dx} × {dy} m within {dr_ok} m")
+
+
+def tried_points(search: Search) -> int:
+    """Pattern points the program tries: every one that passes its filter ``|x| ≤ dx, |y| ≤ dy``."""
+    return int(
+        np.count_nonzero(inside(pattern_points(search.step, search.rings), search.dx, search.dy))
+    )
+
+
+def search_time_problem(
+    search: Search, try_time: float, other_time: float, max_time: float
+) -> str | None:
+    """Why a search is too long for its program to be replayed, or None.
+
+    The L2436 estimate counts the points within Δx/2, Δy/2; a trial whose pin lies at the
+    footprint's corner tries nearly every point, ``(tried_points + 1)·try_time`` [s] (the first
+    attempt included) on top of ``other_time`` [s] (pickup, transport, tap). The referee ends a
+    run past ``max_time`` [s] of simulated time (:data:`synth.al.interpreter.MAX_TIME`, its
+    guard against endless loops), so such a program could never be proven: refuse it here, with
+    the ``footprint`` wording of :mod:`synth.strategies.causes`.
+    """
+    points = tried_points(search)
+    worst = (points + 1) * try_time + other_time
+    if worst <= max_time:
+        return None
+    return (
+        f"error footprint ±{100 * search.dx:.3g} cm × ±{100 * search.dy:.3g} cm: its search of "
+        f"{points} points may take {worst:.0f} s with the rest of the program, more than the "
+        f"{max_time:g} s of simulated time a replayed run may take"
+    )
 
 
 def expected_points(points: NDArray[np.float64], dx: float, dy: float) -> int:
