@@ -131,6 +131,29 @@ def test_one_document_only_and_aliases_need_an_anchor() -> None:
         read_yaml("a: *b\n")
 
 
+def test_a_key_given_twice_is_refused_where_the_second_one_starts() -> None:
+    # YAML keeps the last of two equal keys without a word: a second `uncertainty:` under the
+    # seed's box frame would silently drop its first tolerances (found by a generated task).
+    text = SEED_TASK.read_text(encoding="utf-8")
+    lines = text.splitlines(keepends=True)
+    first = next(i for i, line in enumerate(lines) if line.lstrip().startswith("uncertainty:"))
+    indent = lines[first][: len(lines[first]) - len(lines[first].lstrip())]
+    twice = "".join(
+        [*lines[: first + 1], f"{indent}uncertainty: {{rz: 1 deg}}\n", *lines[first + 1 :]]
+    )
+    with pytest.raises(SpecError) as refused:
+        parse_task(twice)
+    assert refused.value.line == first + 2  # the inserted line, 1-based
+    assert refused.value.path.endswith(".uncertainty")
+    assert f"given twice in one mapping (first at line {first + 1})" in str(refused.value)
+    with pytest.raises(SpecError, match="'name' is given twice") as top:
+        read_yaml("name: a\nname: b\n")
+    assert (top.value.path, top.value.line) == ("name", 2)
+    # Equal keys in different mappings, and YAML's merge key, are not duplicates.
+    assert read_yaml("a: {x: 1}\nb: {x: 2}\n").data == {"a": {"x": 1}, "b": {"x": 2}}
+    assert read_yaml("base: &b {x: 1}\nm: {<<: *b, y: 2}\n").data["m"] == {"x": 1, "y": 2}
+
+
 def test_a_file_over_the_size_limit_is_not_read_whole(tmp_path: Path) -> None:
     big = tmp_path / "big.yaml"
     big.write_text("name: " + "x" * DEFAULT_LIMITS.max_bytes + "\n")

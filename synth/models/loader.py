@@ -21,7 +21,7 @@ from synth.models.graph import AttributeGraph
 from synth.models.jamming import fit_problem
 from synth.models.meshes import hole_problem
 from synth.models.spec import PARAMS, WORLD, FrameSpec, InsertionSpec, TaskSpec, Uncertainty
-from synth.models.yamlread import DEFAULT_LIMITS, PathKey, YamlLimits, read_yaml
+from synth.models.yamlread import DEFAULT_LIMITS, PathKey, YamlLimits, format_path, read_yaml
 
 
 def load_task(path: str | Path, *, limits: YamlLimits = DEFAULT_LIMITS) -> TaskSpec:
@@ -258,17 +258,6 @@ def _strip_union_tags(loc: tuple[Any, ...]) -> PathKey:
             continue
         out.append(part)
     return tuple(out)
-
-
-def format_path(loc: PathKey) -> str:
-    """``('frames', 2, 'uncertainty', 'x')`` → ``'frames[2].uncertainty.x'``."""
-    text = ""
-    for part in loc:
-        if isinstance(part, int):
-            text += f"[{part}]"
-        else:
-            text += f".{part}" if text else str(part)
-    return text
 
 
 def _line_of(loc: PathKey, lines: dict[PathKey, int]) -> int | None:

@@ -18,7 +18,9 @@ names it and the line where it was crossed:
   exponentially.
 
 An alias to an anchor whose node is still open (``&a [*a]``) would make a cyclic value; it is
-refused. Only one document is accepted (as ``yaml.safe_load``).
+refused. So is a key given twice in one mapping: YAML keeps the last silently, and a second
+``uncertainty:`` under a frame would drop the first one's tolerances without a word. Only one
+document is accepted (as ``yaml.safe_load``).
 """
 
 from __future__ import annotations
@@ -69,6 +71,7 @@ class _Open:
     anchor: str | None
     weight: int = 1  # nodes in the expanded subtree, this one included
     key: yaml.Node | None = None  # a mapping's key, waiting for its value
+    keys: dict[str, int | None] = field(default_factory=dict)  # a mapping's keys: their lines
 
 
 def read_yaml(
@@ -92,6 +95,17 @@ def read_yaml(
     except yaml.YAMLError as exc:
         raise SpecError(source, f"YAML error: {exc}") from None
     return YamlDocument(data, lines)
+
+
+def format_path(loc: PathKey) -> str:
+    """``('frames', 2, 'uncertainty', 'x')`` → ``'frames[2].uncertainty.x'``."""
+    text = ""
+    for part in loc:
+        if isinstance(part, int):
+            text += f"[{part}]"
+        else:
+            text += f".{part}" if text else str(part)
+    return text
 
 
 def _too_deep(limits: YamlLimits) -> str:
@@ -151,8 +165,20 @@ def _compose(text: str, source: str, limits: YamlLimits) -> tuple[yaml.Node | No
             top.node.value.append(node)
         elif top.key is None:
             top.key = node
-            if isinstance(node, yaml.ScalarNode) and node.start_mark is not None:
-                lines.setdefault((*top.path, node.value), node.start_mark.line + 1)
+            if isinstance(node, yaml.ScalarNode):
+                line = None if node.start_mark is None else node.start_mark.line + 1
+                if node.value in top.keys and node.value != "<<":  # YAML 1.1's merge key
+                    first = top.keys[node.value]
+                    raise SpecError(
+                        format_path((*top.path, node.value)),
+                        f"the key {node.value!r} is given twice in one mapping"
+                        + ("" if first is None else f" (first at line {first})")
+                        + "; YAML would keep only the last",
+                        line,
+                    )
+                top.keys[node.value] = line
+                if line is not None:
+                    lines.setdefault((*top.path, node.value), line)
         else:
             if len(top.node.value) >= limits.max_items:
                 fail(event, f"a YAML mapping with more than {limits.max_items} entries")
