@@ -204,8 +204,35 @@ def _parse_text(text: str, dim: Dimension) -> float:
         q = q * ureg.standard_gravity
     target = _dimensionality(dim)
     if q.dimensionality != target:
-        raise UnitError(f"{text!r} is not a {dim} (its dimension is {q.dimensionality})")
+        raise UnitError(_wrong_dimension(text, q, dim))
     return si_magnitude(q, _SI_UNIT[dim], text, dim)
+
+
+def _article(noun: str) -> str:
+    return f"an {noun}" if noun[0] in "aeiou" else f"a {noun}"
+
+
+def _wrong_dimension(text: str, q: Any, dim: Dimension) -> str:
+    """``'0.82 deg' is not a length: deg measures an angle; write a length, e.g. '0.82 cm'``.
+
+    The unit's own quantity is named from synth's dimensions; pint counts an angle as
+    dimensionless, so a dimensionless unit is named an angle.
+    """
+    match = QUANTITY.fullmatch(text.strip())
+    number, unit = (match["number"], match["unit"] or "") if match else (text, "")
+    measured = next((d for d in _SI_UNIT if d not in ("dimensionless", dim) and _same(q, d)), None)
+    what = f"measures {_article(measured)}" if measured else f"has dimension {q.dimensionality}"
+    return (
+        f"{text!r} is not {_article(dim)}: {unit} {what}; write {_article(dim)}, "
+        f"e.g. '{number} {_example(dim)}'"
+    )
+
+
+def _same(q: Any, dim: Dimension) -> bool:
+    """Whether ``q`` is a quantity of ``dim`` (an angle: any dimensionless unit but none)."""
+    if dim == "angle":
+        return bool(q.dimensionless) and not q.unitless
+    return bool(q.dimensionality == _dimensionality(dim))
 
 
 _DISPLAY: dict[Dimension, str] = {

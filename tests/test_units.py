@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from synth.exceptions import UnitError
-from synth.units import CM, DEG, INCH, MM, OZ, parse_quantity, registry
+from synth.units import CM, DEG, INCH, MM, OZ, Dimension, parse_quantity, registry
 
 
 @pytest.mark.parametrize(
@@ -28,5 +28,31 @@ def test_a_kept_quantity_is_the_fresh_one_and_refusals_are_raised_each_time() ->
     assert first == pytest.approx(1.5 * INCH, rel=1e-15)  # the inch is 2.54 cm exactly
     assert parse_quantity("1.5 in", "length") == first
     for _ in range(2):  # the same text asked as another dimension is refused, every time
-        with pytest.raises(UnitError, match="not a angle"):
+        with pytest.raises(UnitError, match="is not an angle: in measures a length"):
             parse_quantity("1.5 in", "angle")
+
+
+@pytest.mark.parametrize(
+    ("text", "dim", "message"),
+    [
+        # pint counts an angle as dimensionless ("its dimension is dimensionless" was the message)
+        (
+            "0.82 deg",
+            "length",
+            "'0.82 deg' is not a length: deg measures an angle; write a length, e.g. '0.82 cm'",
+        ),
+        (
+            "0.3 cm",
+            "angle",
+            "'0.3 cm' is not an angle: cm measures a length; write an angle, e.g. '0.3 deg'",
+        ),
+        ("2 s", "force", "'2 s' is not a force: s measures a time; write a force, e.g. '2 N'"),
+        ("1 N*m", "mass", "'1 N*m' is not a mass: N*m measures a torque"),
+    ],
+)
+def test_a_quantity_of_the_wrong_kind_names_what_its_unit_measures(
+    text: str, dim: Dimension, message: str
+) -> None:
+    with pytest.raises(UnitError) as refused:
+        parse_quantity(text, dim)
+    assert str(refused.value).startswith(message)
