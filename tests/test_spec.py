@@ -103,6 +103,12 @@ BAD = [
     ("duplicate AL name", GOOD.replace("al_name: BH1", "al_name: box"), "frames[1].al_name", 10),
     ("unknown field", GOOD.replace("name: t", "name: t\nfoo: 1"), "foo", 2),
     (
+        "short translation",
+        GOOD.replace("[1 cm, 2 cm, 0 cm]", "[1 cm, 2 cm]"),
+        "frames[0].pose.translation[2]",
+        5,
+    ),
+    (
         "cycle",
         GOOD.replace("    al_name: BOX\n", "    al_name: BOX\n    parent: hole\n"),
         "frames[0].parent",
@@ -134,6 +140,8 @@ def test_bad_spec_names_field_and_line(label: str, text: str, path: str, line: i
         parse_task(text)
     assert info.value.path == path, str(info.value)
     assert info.value.line == line, str(info.value)
+    if label == "short translation":  # not "this field is required" of a field never written
+        assert info.value.detail == "the list has 2 values; value 3 is required too"
 
 
 def test_coupled_constraint_units() -> None:

@@ -235,6 +235,11 @@ def _message(err: Any) -> str:
         if msg.startswith(prefix):
             msg = msg[len(prefix) :]
     if err.get("type") == "missing":
+        loc = err.get("loc", ())
+        if loc and isinstance(loc[-1], int):  # a fixed-length list (x, y, z) ended early
+            given = loc[-1]
+            plural = "s" if given != 1 else ""
+            return f"the list has {given} value{plural}; value {given + 1} is required too"
         return "this field is required"
     if err.get("type") == "extra_forbidden":
         return "unknown field"
