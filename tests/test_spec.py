@@ -208,3 +208,22 @@ def test_cli_errors_against_the_world_frame(capsys: pytest.CaptureFixture[str]) 
     # ±5° acting on the hole's lever arm y = 3.20 cm: 3.20·0.0873 = 0.279 cm; 1.041 cm in all.
     assert "Errors of world⁻¹ ∘ BH1" in out
     assert "-1.041 .. +1.041 cm" in out
+
+
+def test_a_hole_deeper_than_its_box_is_refused_at_its_depth() -> None:
+    # BH1 of the seed task is 1.71 cm deep in a 4.90 cm box. At 5.00 cm the pin's seat d_f
+    # would lie 0.10 cm below the box's floor, inside the table: the planner used to refuse it
+    # only after planning ("the insertion into BH1 sweeps PIN1 into table").
+    text = SEED_TASK.read_text(encoding="utf-8")
+    bh1 = "    # rtd = hole radius + pin tip radius"
+    assert text.count(bh1) == 1
+    head, tail = text.split(bh1)
+    deeper = head + bh1 + tail.replace("depth: 1.71 cm", "depth: 5.00 cm", 1)
+    with pytest.raises(SpecError) as refused:
+        parse_task(deeper)
+    assert refused.value.path == "frames[2].shape.depth"
+    assert refused.value.line == text[: text.index("depth: 1.71 cm")].count("\n") + 1
+    assert "5 cm deep in box 'box', which is 4.9 cm tall" in refused.value.detail
+    # A through hole (depth = the box's height) is a hole the meshes drill (test_meshes).
+    through = head + bh1 + tail.replace("depth: 1.71 cm", "depth: 4.90 cm", 1)
+    assert parse_task(through).frames[2].shape.depth == pytest.approx(0.049)

@@ -151,7 +151,7 @@ def check_task(spec: TaskSpec, lines: dict[PathKey, int] | None = None) -> None:
 
 
 def _check_holes_fit(spec: TaskSpec, fail: Any) -> None:
-    """Fail if a hole drilled into a box's top face does not fit on that face.
+    """Fail if a hole drilled into a box's top face does not fit on that face, or in the box.
 
     The replay drills it with :func:`synth.models.meshes.box_with_holes`; its rule
     (:func:`~synth.models.meshes.hole_problem`: the mouth, of radius diameter/2 +
@@ -171,6 +171,13 @@ def _check_holes_fit(spec: TaskSpec, fail: Any) -> None:
         x, y, z = (round(float(v), 12) for v in local.translation)  # as the workcell does
         if local.rotation[2, 2] < 1.0 - _ON_FACE or abs(z - box.size[2]) > _ON_FACE:
             continue
+        if shape.depth > box.size[2] + _ON_FACE:  # the pin's seat (d_f) would be below the box
+            fail(
+                ("frames", i, "shape", "depth"),
+                f"hole {f.name!r} is {100 * shape.depth:.4g} cm deep in box {owner!r}, which is "
+                f"{100 * box.size[2]:.4g} cm tall: a hole cannot be deeper than its box (a "
+                "through hole's depth is the box's height)",
+            )
         hole = (x, y, shape.diameter, shape.depth, shape.chamfer_width)
         problem = hole_problem(box.size, hole)
         if problem is not None:
