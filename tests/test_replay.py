@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
-from _paths import DATA_AL, SEED_TAP_TASK, SEED_TASK
+from _paths import DATA_AL, SEED_PROGRAM, SEED_TAP_TASK, SEED_TASK
 from _tasks import with_base
 
 from synth.al.parser import parse_program
@@ -217,6 +217,22 @@ def test_a_motion_into_the_table_is_a_collision_at_its_line() -> None:
     assert "table" in violation.detail and "finger" in violation.detail
     # the run stops at the collision: the third statement never runs
     assert report.nominal.statements == 2
+
+
+def test_a_seated_pin_dragged_sideways_out_of_its_rack_jams_at_the_drag() -> None:
+    # The golden program with one line after AFFIX: the pin, seated in RH1, carried 4 cm
+    # sideways. The bore stops it 1 cm off the axis (the replay's compliance): a jam at that
+    # line. It used to pass as a stall at the rack hole's bottom (the move's bow pushes the
+    # seated tip a few µm deeper first), and the program went on to succeed.
+    text = SEED_PROGRAM.read_text(encoding="utf-8")
+    affix = "AFFIX PIN1 TO BMANIP;\n"
+    assert text.count(affix) == 1
+    line = text[: text.index(affix)].count("\n") + 2
+    text = text.replace(affix, affix + "MOVE PIN1 TO PIN1*TRANS(NILROTN,VECTOR(4,0,0)*CM);\n")
+    report = replay_program(text, SEED_TASK)
+    (violation,) = report.nominal.violations
+    assert (violation.kind, violation.line) == ("collision", line)
+    assert "PIN1 jammed in RH1" in violation.detail and "1.00 cm sideways" in violation.detail
 
 
 def test_a_guarded_motion_onto_the_table_stops_without_violation() -> None:

@@ -217,3 +217,32 @@ def test_guided_pin_bottoms_at_its_seat(graph: AttributeGraph, model: WorkcellMo
 
     jam = guided_motion(bh1, sideways, seat=seat_depth(bh1, pin1), compliance=1 * CM)
     assert jam.kind == "jam" and math.isclose(jam.lateral, 1 * CM, abs_tol=1e-8)
+
+
+def test_a_seated_pin_dragged_sideways_jams_and_pushed_in_stalls_after_the_give(
+    graph: AttributeGraph, model: WorkcellModel
+) -> None:
+    cell = model.place(nominal_world(graph))
+    bh1, pin1 = cell.hole("bh1"), cell.pins["pin1"]
+    seat = seat_depth(bh1, pin1)
+    # The tip at the seat up to rounding, as a stop leaves it (1e-15 m short of it).
+    seated = bh1.world_from_hole * pin.SE3(np.eye(3), np.array([0.0, 0.0, -(seat - 1e-15)]))
+
+    def bowed(s: float) -> pin.SE3:
+        # 4 cm sideways with a joint-interpolated move's bow, up to 0.5 mm deeper mid-way
+        return seated * pin.SE3(
+            np.eye(3), np.array([4 * CM * s, 0.0, -0.05 * CM * 4 * s * (1 - s)])
+        )
+
+    # The bore stops the drag 1 cm off the axis, the bow having pushed 0.5·4·¼·(3/4) = 0.375 mm
+    # into the bottom at s = ¼, within the arm's 1 cm give (it stalled at s ≈ 0 as "bottom").
+    drag = guided_motion(bh1, bowed, seat=seat, compliance=1 * CM)
+    assert drag.kind == "jam" and math.isclose(drag.s, 0.25, abs_tol=1e-6)
+
+    def pushed(s: float) -> pin.SE3:
+        return seated * pin.SE3(np.eye(3), np.array([0.0, 0.0, -2 * CM * s]))
+
+    # Pushed 2 cm further in: the arm gives 1 cm, then stalls (half-way), the pin at its seat.
+    push = guided_motion(bh1, pushed, seat=seat, compliance=1 * CM)
+    assert push.kind == "bottom" and math.isclose(push.s, 0.5, abs_tol=1e-6)
+    assert push.depth == seat

@@ -731,13 +731,15 @@ def guided_motion(
     end: float = 1.0,
     compliance: float = 0.01,
     exit_margin: float = 1e-3,
+    seated_within: float = 1e-4,
     samples: int = 64,
     flight: PinFlight | None = None,
 ) -> GuidedEnd:
     """The end of a pin's guided phase in ``hole`` over s ∈ [start, end] (module docstring).
 
     ``pose_at`` is the *commanded* pin pose (where the arm would carry it without the hole);
-    ``seat`` [m] is the depth at which the pin bottoms. The commanded path is sampled at
+    ``seat`` [m] is the depth at which the pin bottoms, and a pin starting within
+    ``seated_within`` [m] of it is seated (:func:`_bottom`). The commanded path is sampled at
     ``samples`` points and the first event is located by bisection.
 
     With a ``flight`` (the same commanded path with its motion bounds) the same first sample
@@ -749,15 +751,16 @@ def guided_motion(
     reference's bisection width.
     """
     if flight is not None:
-        return _guided_flight(hole, flight, seat, start, end, compliance, exit_margin, samples)
+        return _guided_flight(
+            hole, flight, seat, start, end, compliance, exit_margin, seated_within, samples
+        )
 
     def state(s: float) -> tuple[float, float]:
         p = tip_placement(hole, pose_at(s))
         return -p.axial, p.lateral
 
-    # a pin already at (or past) its seat bottoms only if the path pushes it further in
     depth0, _ = state(start)
-    bottom = seat if depth0 < seat else depth0 + 1e-9
+    bottom = _bottom(depth0, seat, compliance, seated_within)
 
     def event(s: float) -> Literal["bottom", "exit", "jam"] | None:
         return _guided_event(*state(s), bottom, compliance, exit_margin)
@@ -780,6 +783,21 @@ def guided_motion(
         return GuidedEnd(hi, kind, min(max(depth, 0.0), seat), lateral)
     depth, lateral = state(end)
     return GuidedEnd(end, "end", min(max(depth, 0.0), seat), lateral)
+
+
+def _bottom(depth0: float, seat: float, compliance: float, seated_within: float) -> float:
+    """The commanded depth [m] at which a guided pin starting ``depth0`` deep stalls.
+
+    A pin above its ``seat`` stalls on reaching it. A pin already seated (within
+    ``seated_within`` of the seat: a stop leaves it there up to rounding) stalls only when the
+    path pushes it in by more than the arm's give, ``compliance``, the same give that bounds a
+    sideways drag (:func:`_guided_event`). A joint-interpolated move bows, and a seated pin
+    dragged sideways stalled on the bow's first nanometre downwards and was never seen to jam:
+    a 4 cm drag of the pin seated in the rack passed as a stall at the bottom.
+    """
+    if depth0 < seat - seated_within:
+        return seat
+    return max(depth0, seat) + compliance
 
 
 def _guided_event(
@@ -807,6 +825,7 @@ def _guided_flight(
     end: float,
     compliance: float,
     exit_margin: float,
+    seated_within: float,
     samples: int,
 ) -> GuidedEnd:
     """:func:`guided_motion` along a :class:`~synth.replay.bounds.PinFlight` (its docstring)."""
@@ -826,7 +845,7 @@ def _guided_flight(
 
     flight.at(start)
     depth0, lateral0 = state(flight.translation)
-    bottom = seat if depth0 < seat else depth0 + 1e-9
+    bottom = _bottom(depth0, seat, compliance, seated_within)
     known_s, known_margin, known_speed = start, margin(depth0, lateral0), flight.speed
     curvature = flight.curvature
     previous = start

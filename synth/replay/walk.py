@@ -201,6 +201,7 @@ def walk_segment(
                 start=s,
                 compliance=options.compliance,
                 exit_margin=options.exit_margin,
+                seated_within=options.seat_tolerance,
                 flight=flight,
             )
             if end.kind == "exit":
