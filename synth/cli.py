@@ -55,6 +55,7 @@ EXIT_REPLAY_FAILED = 1
 EXIT_USAGE = 2
 EXIT_INTERNAL = 70
 EXIT_INTERRUPTED = 130
+EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE, as a shell reports a process the signal ended
 
 EXIT_CODES_HELP = f"""exit codes:
   {EXIT_OK}   success
@@ -63,7 +64,8 @@ EXIT_CODES_HELP = f"""exit codes:
   {EXIT_USAGE}   unusable input or a refusal: bad arguments, an invalid task or program, no
       strategy proven (synth plan), an AL runtime error (synth replay)
   {EXIT_INTERNAL}  internal error (SYNTH_DEBUG=1 prints the traceback)
-  {EXIT_INTERRUPTED} interrupted"""
+  {EXIT_INTERRUPTED} interrupted
+  {EXIT_BROKEN_PIPE} the reader of standard output closed it (e.g. `| head`)"""
 DEFAULT_PROOF_TRIALS = 100
 """Proof trials of ``synth plan`` (kept equal to :data:`synth.replay.proof.DEFAULT_PROOF_TRIALS`
 by a test; the CLI does not import the replay to print its help)."""
@@ -232,8 +234,13 @@ def _cmd_replay(args: argparse.Namespace) -> int:
         _write_montecarlo(args, report)
     if args.trace is not None:
         _write_trace(args, text)
+    rate = report.monte_carlo.success_rate
+    below = args.min_success is not None and rate is not None and rate < args.min_success
     if args.json:
-        records.finish(report.to_json())
+        document = report.to_json()
+        if args.min_success is not None:
+            document["min_success"] = {"required": args.min_success, "rate": rate, "met": not below}
+        records.finish(document)
     else:
         print(replay_summary(report))
         if args.distribution is not None and args.trials:
@@ -249,8 +256,7 @@ def _cmd_replay(args: argparse.Namespace) -> int:
         return 130
     if not report.ok:
         return 2 if report.nominal.outcome == "error" else 1
-    rate = report.monte_carlo.success_rate
-    if args.min_success is not None and rate is not None and rate < args.min_success:
+    if below:
         if not args.json:
             print(
                 f"  below --min-success {args.min_success:g}: observed rate {rate:.4f}",
@@ -299,6 +305,10 @@ def _check_diagnostics(args: argparse.Namespace) -> None:
         raise SynthError(f"--trial must be 0 or more, got {args.trial}")
     if args.min_success is not None and not 0.0 <= args.min_success <= 1.0:
         raise SynthError(f"--min-success must be between 0 and 1, got {args.min_success:g}")
+    if args.min_success is not None and (args.trial is not None or args.trials == 0):
+        # a rate needs trials: with none (or one re-run alone) the bound would never be checked
+        alone = "--trial I re-runs one trial" if args.trial is not None else "--trials is 0"
+        raise SynthError(f"--min-success compares a Monte Carlo rate, but {alone}")
 
 
 def _run_one(args: argparse.Namespace, text: str) -> int:
@@ -396,8 +406,9 @@ def _add_replay_parser(sub: Any) -> None:
         "replay",
         help="run an AL program on the simulated arm: a nominal run and Monte Carlo trials",
         epilog="exit codes: 0 the nominal run succeeds; 1 it fails (abort, violation, pin not "
-        "seated); 2 unusable input (syntax error, missing file, AL runtime error); 70 internal "
-        "error",
+        "seated) or the Monte Carlo rate is below --min-success; 2 unusable input (syntax "
+        "error, missing file, AL runtime error); 70 internal error; 130 interrupted; 141 the "
+        "reader of standard output closed it",
     )
     p.add_argument(
         "program",
@@ -806,6 +817,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("synth: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except BrokenPipeError:
+        # The reader of standard output went away (`synth replay … --json | head`): stop
+        # quietly, as a process killed by SIGPIPE would, and keep the interpreter's last flush
+        # from raising again at exit (the recipe of Python's signal module documentation).
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return EXIT_BROKEN_PIPE
     except Exception as exc:
         if os.environ.get("SYNTH_DEBUG"):
             raise

@@ -15,7 +15,14 @@ import pytest
 from _paths import SEED_PROGRAM, SEED_TASK
 
 from synth.al.parser import parse_program
-from synth.cli import EXIT_INTERNAL, EXIT_REPLAY_FAILED, EXIT_USAGE, main
+from synth.cli import (
+    EXIT_BROKEN_PIPE,
+    EXIT_INTERNAL,
+    EXIT_INTERRUPTED,
+    EXIT_REPLAY_FAILED,
+    EXIT_USAGE,
+    main,
+)
 from synth.progress import ProgressBar
 from synth.report import strip_seed_references
 
@@ -35,7 +42,14 @@ def test_help_lists_the_exit_codes(capsys: pytest.CaptureFixture[str]) -> None:
         main(["--help"])
     text = capsys.readouterr().out
     block = text[text.index("exit codes:") :]
-    for code in (0, EXIT_REPLAY_FAILED, EXIT_USAGE, EXIT_INTERNAL):
+    for code in (
+        0,
+        EXIT_REPLAY_FAILED,
+        EXIT_USAGE,
+        EXIT_INTERNAL,
+        EXIT_INTERRUPTED,
+        EXIT_BROKEN_PIPE,
+    ):
         assert re.search(rf"^\s+{code}\s+\S", block, re.MULTILINE), code
 
 

@@ -223,6 +223,11 @@ def test_failures_and_min_success(capsys: pytest.CaptureFixture[str]) -> None:
     assert f"rz {math.degrees(box['rz']):+.4f}°" in out
     code, _ = _cli(_replay_args(30, "--min-success", "0.96"), capsys)
     assert code == 0
+    # With --json the exit code's reason is in the document too (`ok` is the nominal run's).
+    code, out = _cli(_replay_args(30, "--json", "--min-success", "0.97"), capsys)
+    document = json.loads(out)
+    assert code == 1 and document["ok"] is True
+    assert document["min_success"] == {"required": 0.97, "rate": 29 / 30, "met": False}
 
 
 def test_one_trial_alone_is_the_trial_of_the_full_run(capsys: pytest.CaptureFixture[str]) -> None:
@@ -246,6 +251,26 @@ def test_diagnostic_options_are_checked(capsys: pytest.CaptureFixture[str]) -> N
     ):
         assert main(_replay_args(2, option, value)) == 2
         assert f"{option} must be {rule}" in capsys.readouterr().err
+    # A bound on a rate with no rate to compare it with would never fail: refused.
+    for extra, reason in (((), "--trials is 0"), (("--trial", "3"), "--trial I re-runs one")):
+        assert main(_replay_args(0 if not extra else 2, *extra, "--min-success", "0.9")) == 2
+        assert f"--min-success compares a Monte Carlo rate, but {reason}" in capsys.readouterr().err
+
+
+def test_a_reader_that_closes_the_pipe_ends_the_replay_quietly() -> None:
+    # `synth replay … --json | head -c 100`: the records stream on after head has gone.
+    process = subprocess.Popen(
+        [str(SYNTH), *_replay_args(20, "--json")],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        cwd=ROOT,
+    )
+    assert process.stdout is not None and process.stderr is not None
+    assert process.stdout.read(100).startswith(b'{\n  "trials": [')
+    process.stdout.close()
+    err = process.stderr.read().decode()
+    assert process.wait(timeout=120) == 141  # 128 + SIGPIPE, as a shell reports one
+    assert "internal error" not in err and "Traceback" not in err and "Exception" not in err
 
 
 def _record(index: int, outcome: str) -> TrialRecord:
