@@ -44,6 +44,7 @@ from __future__ import annotations
 import io
 import json
 import math
+import os
 import signal
 import subprocess
 import sys
@@ -328,3 +329,33 @@ def test_ctrl_c_stops_within_a_second_and_reports_the_trials_done(workers: str) 
     done = int(line.split("interrupted: ")[1].split(" of ")[0])
     assert done >= 3 and "of 100000 trials done" in line
     assert f"Monte Carlo: {done} trials (seed 0)" in out
+
+
+def test_ctrl_c_on_a_local_dask_cluster_reports_without_worker_tracebacks() -> None:
+    pytest.importorskip("distributed")
+    command = [str(SYNTH), *_replay_args(100_000, "--progress", "--dask", "local")]
+    command[command.index("--workers") + 1] = "2"
+    # A terminal's Ctrl-C goes to the whole process group, the cluster's workers included:
+    # its own session, so the signal reaches this command's group alone.
+    process = subprocess.Popen(
+        command,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=ROOT,
+        start_new_session=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
+    assert process.stderr is not None
+    seen = ""
+    deadline = time.monotonic() + 180
+    while time.monotonic() < deadline and " 9/100000" not in seen:  # a chunk or two done
+        seen += process.stderr.read(1)
+    sent = time.monotonic()
+    os.killpg(process.pid, signal.SIGINT)
+    out, err = process.communicate(timeout=60)
+    took = time.monotonic() - sent
+    assert process.returncode == 130
+    assert took < 5.0, took  # the running chunks of 8 trials (≈ 25 ms each) finish first
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err[-2000:]
+    assert "interrupted:" in out and "of 100000 trials done" in out

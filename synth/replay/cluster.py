@@ -21,6 +21,7 @@ Dask is an optional dependency (the ``dask`` extra): nothing here imports it at 
 
 from __future__ import annotations
 
+import signal
 import threading
 from collections import deque
 from collections.abc import Generator, Iterator
@@ -86,6 +87,26 @@ def iter_trials_on(
 
 
 @contextmanager
+def _sigint_ignored_by_children() -> Generator[None, None, None]:
+    """SIGINT ignored while the ``LocalCluster``'s worker processes start, then restored.
+
+    A terminal's Ctrl-C goes to the whole process group. The workers inherit the ignored
+    disposition (a spawned interpreter keeps an ignored SIGINT ignored), so only this process
+    sees the Ctrl-C: it stops the trials and closes the cluster, instead of every worker
+    dying on a KeyboardInterrupt with a traceback each, seconds later. Off the main thread
+    (the Python API from a thread) signals cannot be set, and nothing changes.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+@contextmanager
 def dask_client(address: str, workers: int) -> Generator[Any, None, None]:
     """A ``distributed.Client`` for ``--dask ADDRESS``, closed on exit.
 
@@ -100,9 +121,10 @@ def dask_client(address: str, workers: int) -> Generator[Any, None, None]:
             "--dask needs Dask: pip install 'synth[dask]' (dask[distributed])"
         ) from None
     if address == "local":
-        cluster = LocalCluster(
-            n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
-        )
+        with _sigint_ignored_by_children():
+            cluster = LocalCluster(
+                n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
+            )
         client = Client(cluster)
         try:
             yield client
