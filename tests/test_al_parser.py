@@ -496,8 +496,16 @@ ERRORS = [
     ("X ← 1\nY ← 2", 2, 1, "';'", "missing ';'"),
     ("X ← 2 INCHES", 1, 7, "an operator", "missing '*'"),
     ("X ← 8e02", 1, 6, "';'", "no exponent"),
-    ("BEGIN MOVE A TO B", 1, 18, "END", "no matching END"),
-    ("COBEGIN STOP", 1, 13, "COEND", "no matching COEND"),
+    ("BEGIN MOVE A TO B", 1, 18, "END", "the BEGIN at line 1 has no matching END"),
+    ("COBEGIN STOP", 1, 13, "COEND", "the COBEGIN at line 1 has no matching COEND"),
+    # the block left open is named: line 1's and line 5's are closed, line 4's is not
+    (
+        "BEGIN\n  X ← 1\nEND;\nBEGIN\n  BEGIN X ← 2 END;\n  X ← 3\n",
+        7,
+        1,
+        "END",
+        "the BEGIN at line 4 has no matching END",
+    ),
     ("X ← END", 1, 5, "an expression", "reserved word"),
     ("FRAME A, STOP;", 1, 10, "a name", "reserved word"),
     ("MOVE A TOWER", 1, 8, "TO", None),

@@ -505,6 +505,22 @@ def _previous_token(text: str, token: Token) -> Token | None:
     return previous
 
 
+def _unclosed(text: str, opening: str, closing: str) -> str:
+    """``the BEGIN at line 25 has no matching END``: the innermost block left open at the end."""
+    open_lines: list[int] = []
+    try:
+        for token in _lark().lex(text):
+            if token.type == opening:
+                open_lines.append(token.line or 0)
+            elif token.type == closing and open_lines:
+                open_lines.pop()
+    except UnexpectedInput:
+        open_lines = []
+    if not open_lines:
+        return f"a {opening} has no matching {closing}"
+    return f"the {opening} at line {open_lines[-1]} has no matching {closing}"
+
+
 def _token_hint(error: UnexpectedToken, text: str, accepts: frozenset[str]) -> str | None:
     token = error.token
     previous = _previous_token(text, token)
@@ -517,9 +533,9 @@ def _token_hint(error: UnexpectedToken, text: str, accepts: frozenset[str]) -> s
             return label
     if kind == "$END":
         if "END" in accepts:
-            return "a BEGIN has no matching END"
+            return _unclosed(text, "BEGIN", "END")
         if "COEND" in accepts:
-            return "a COBEGIN has no matching COEND"
+            return _unclosed(text, "COBEGIN", "COEND")
         return None
     after_number = previous is not None and previous.type == "NUMBER" and kind == "NAME"
     if after_number and previous is not None and previous.end_pos == token.start_pos:
