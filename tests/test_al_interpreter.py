@@ -294,6 +294,11 @@ def test_assignment_type_checks() -> None:
     assert "unknown name Q" in al_error("X ← Q + 1;").problem
     error = al_error("BEGIN SCALAR X; X ← 1; END; Y ← X;")
     assert error.problem == "unknown name X"  # released with its block
+    # MOVE of a name nobody declared says so, as any other use of it does
+    assert al_error("MOVE PIN9 TO NILTRANS;").problem == "unknown name PIN9: MOVE needs a frame"
+    assert al_error("SCALAR S; S ← 1; MOVE S TO NILTRANS;").problem == (
+        "MOVE needs a frame, and S is a SCALAR"
+    )
 
 
 # --------------------------------------------------------------------------------------------

@@ -727,8 +727,10 @@ class Interpreter:
 
     def _move(self, s: ast.Move, cx: _Context) -> Iterator[None]:
         moved = cx.scope.lookup(s.frame.name)
-        if moved is None or moved.type not in ("FRAME", "TRANS"):
-            raise self._error(s.frame, f"MOVE needs a frame, and {s.frame.name} is not one")
+        if moved is None:
+            raise self._error(s.frame, f"unknown name {s.frame.name}: MOVE needs a frame")
+        if moved.type not in ("FRAME", "TRANS"):
+            raise self._error(s.frame, f"MOVE needs a frame, and {s.frame.name} is a {moved.type}")
         hand_from_frame = self._hand_from(moved, s)
         points: list[tuple[ast.Expr, Value]] = [(s.destination, self._eval(s.destination, cx))]
         points += [(p, self._eval(p, cx)) for p in s.via_points]
