@@ -21,8 +21,11 @@ Dask is an optional dependency (the ``dask`` extra): nothing here imports it at 
 
 from __future__ import annotations
 
+import logging
 import signal
 import threading
+import time
+import uuid
 from collections import deque
 from collections.abc import Generator, Iterator
 from contextlib import contextmanager
@@ -44,10 +47,33 @@ CONNECT_TIMEOUT_S = 5.0
 """[s] how long ``--dask ADDRESS`` keeps retrying an unreachable scheduler before it gives up."""
 
 
-def _run_chunk_serial(job: TrialJob, seed: int, start: int, stop: int) -> list[RunReport]:
-    """:func:`~synth.replay.trials.run_chunk`, one at a time in a worker process."""
+_STOP_EVERY_S = 0.2
+"""[s] how often a worker's chunk asks the scheduler whether the run was stopped."""
+
+
+def _run_chunk_serial(
+    job: TrialJob, seed: int, start: int, stop: int, stopped: str | None = None
+) -> list[RunReport]:
+    """:func:`~synth.replay.trials.run_chunk`, one at a time in a worker process.
+
+    ``stopped`` names a ``distributed.Event`` the consumer sets when it stops early (Ctrl-C):
+    looked at between trials, at most every :data:`_STOP_EVERY_S` (a scheduler round trip,
+    ~1 ms), so a running chunk ends one trial after the stop instead of running its trials
+    out while the cluster waits to close. Its runs are then partial, and nobody reads them.
+    """
     with _LOCK:
-        return run_chunk(job, seed, start, stop)
+        if stopped is None:
+            return run_chunk(job, seed, start, stop)
+        from distributed import Event
+
+        event, runs, asked = Event(stopped), [], time.monotonic()
+        for i in range(start, stop):
+            runs += run_chunk(job, seed, i, i + 1)
+            if time.monotonic() - asked >= _STOP_EVERY_S:
+                if event.is_set():
+                    break
+                asked = time.monotonic()
+        return runs
 
 
 def _threads(client: Any) -> int:
@@ -67,9 +93,12 @@ def iter_trials_on(
     stays bounded whatever ``count`` is. ``stop``: as for
     :func:`~synth.replay.trials.iter_trials`.
     """
+    from distributed import Event
+
     limit = _AHEAD * _threads(client)
     starts: Iterator[int] = iter(range(0, count, _CHUNK))
     in_flight: deque[Any] = deque()
+    stopped = f"synth-trials-stopped-{uuid.uuid4().hex}"
     try:
         while True:
             while len(in_flight) < limit:
@@ -77,12 +106,15 @@ def iter_trials_on(
                 if a is None:
                     break
                 end = min(a + _CHUNK, count)
-                in_flight.append(client.submit(_run_chunk_serial, job, seed, a, end, pure=False))
+                in_flight.append(
+                    client.submit(_run_chunk_serial, job, seed, a, end, stopped, pure=False)
+                )
             if not in_flight:
                 return
             yield from result_or_interrupt(in_flight.popleft(), stop)
     finally:
         if in_flight:
+            Event(stopped, client=client).set()  # the running chunks end after their trial
             client.cancel(list(in_flight))
 
 
@@ -123,7 +155,11 @@ def dask_client(address: str, workers: int) -> Generator[Any, None, None]:
     if address == "local":
         with _sigint_ignored_by_children():
             cluster = LocalCluster(
-                n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
+                n_workers=workers,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=None,
+                silence_logs=logging.ERROR,  # a stop's cancelled tasks each log a warning
             )
         client = Client(cluster)
         try:
