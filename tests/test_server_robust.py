@@ -43,6 +43,18 @@ def test_a_cursor_beyond_64_bits_is_422_not_a_database_overflow(client: TestClie
     assert client.get("/v1/plans", params={"cursor": str(2**63 - 1)}).status_code == 200
 
 
+def test_a_number_of_thousands_of_digits_is_422_at_its_line_not_a_500(client: TestClient) -> None:
+    # Python's int() refuses over 4 300 digits with a ValueError of its own: it was a 500 on
+    # every route that reads a task (plans, batch, replays), with a traceback in the log.
+    huge = "9" * 5000
+    spec = SEED_TASK.read_text(encoding="utf-8").replace("name: seed_4_8", f"name: {huge}", 1)
+    body = problem(client.post("/v1/plans", content=spec.encode(), headers=YAML), 422)
+    assert "a number written with 5000 characters (more than 100)" in str(body["detail"])
+    assert body["path"] == "name"
+    replay = client.post("/v1/replays", json={"program": "BEGIN END", "spec": spec, "trials": 1})
+    problem(replay, 422)
+
+
 def test_a_json_body_that_is_not_utf8_is_a_documented_400(client: TestClient) -> None:
     answer = client.post(
         "/v1/replays", content=b'{"program": "\xff"}', headers={"Content-Type": "application/json"}

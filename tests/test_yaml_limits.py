@@ -131,6 +131,15 @@ def test_one_document_only_and_aliases_need_an_anchor() -> None:
         read_yaml("a: *b\n")
 
 
+def test_an_integer_of_thousands_of_digits_is_refused_at_its_line() -> None:
+    # int() of over 4 300 digits raises a ValueError naming no line (a 500 in the service)
+    with pytest.raises(SpecError, match=r"5000 characters \(more than 100\)") as refused:
+        read_yaml("a: 1\nb:\n  c: " + "7" * 5000 + "\n")
+    assert (refused.value.path, refused.value.line) == ("b.c", 3)
+    assert read_yaml("a: " + "7" * 100 + "\n").data == {"a": int("7" * 100)}
+    assert read_yaml("a: '" + "7" * 5000 + "'\n").data == {"a": "7" * 5000}  # a string is not
+
+
 def test_a_key_given_twice_is_refused_where_the_second_one_starts() -> None:
     # YAML keeps the last of two equal keys without a word: a second `uncertainty:` under the
     # seed's box frame would silently drop its first tolerances (found by a generated task).

@@ -53,6 +53,11 @@ class YamlLimits:
 
 DEFAULT_LIMITS = YamlLimits()
 
+MAX_NUMBER_CHARS = 100
+"""Characters of a YAML integer at most: no task needs more, and past 4 300 digits Python's
+``int()`` raises a ValueError of its own (which the service would answer with a 500)."""
+_INT_TAG = "tag:yaml.org,2002:int"
+
 
 @dataclass(frozen=True)
 class YamlDocument:
@@ -209,6 +214,14 @@ def _compose(text: str, source: str, limits: YamlLimits) -> tuple[yaml.Node | No
             tag = event.tag
             if tag is None or tag == "!":
                 tag = resolver.resolve(yaml.ScalarNode, event.value, event.implicit)
+            if tag == _INT_TAG and len(event.value) > MAX_NUMBER_CHARS:
+                # Python refuses int() of over 4300 digits with a ValueError that names no line
+                raise SpecError(
+                    format_path(path_of_next(event)),
+                    f"a number written with {len(event.value)} characters (more than "
+                    f"{MAX_NUMBER_CHARS})",
+                    _line(event),
+                )
             marks: tuple[Any, Any] = (event.start_mark, event.end_mark)  # libyaml's or PyYAML's
             node = yaml.ScalarNode(tag, event.value, *marks, style=event.style)
             if event.anchor is not None:
