@@ -157,3 +157,37 @@ def test_cli_writes_the_view(tmp_path: Path) -> None:
     assert main(["view", str(SEED_TASK), str(al), "-o", str(out)]) == 0
     assert "synth view" in out.read_text(encoding="utf-8")
     assert main(["view", str(SEED_TASK), str(tmp_path / "missing.al"), "-o", str(out)]) == 2
+
+
+def test_text_from_the_task_cannot_break_out_of_the_scene_data() -> None:
+    # A task named "<!--<script>" switched the HTML parser into a script's escaped state and
+    # took the page's own script with it (the program panel stayed empty in Chromium).
+    import html.parser
+    import json
+
+    hostile = "<!--<script></script>--> & </SCRIPT>"
+    scene = {"title": hostile, "program": [hostile], "nested": {"n": [1, 2.5, None]}}
+    page = view_html(scene)
+
+    class Scripts(html.parser.HTMLParser):
+        def __init__(self) -> None:
+            super().__init__()
+            self.data: list[str] = []
+            self.inside = False
+
+        def handle_starttag(self, tag: str, attrs: list) -> None:  # type: ignore[type-arg]
+            self.inside = tag == "script" and ("id", "scene") in attrs
+
+        def handle_endtag(self, tag: str) -> None:
+            self.inside = False
+
+        def handle_data(self, data: str) -> None:
+            if self.inside:
+                self.data.append(data)
+
+    parser = Scripts()
+    parser.feed(page)
+    assert json.loads("".join(parser.data)) == scene  # the element holds the whole document
+    payload = page.split('id="scene">', 1)[1].split("</script>", 1)[0]
+    assert "<" not in payload and ">" not in payload and "&" not in payload
+    assert "&lt;!--&lt;script&gt;" in page  # and the <title> is escaped as text

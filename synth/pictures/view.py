@@ -256,11 +256,23 @@ def _classic_three() -> tuple[str, str]:
     return source[: match.start()], "{" + ",".join(pairs) + "}"
 
 
+def script_json(value: Any) -> str:
+    r"""``value`` as JSON safe inside an HTML ``<script>`` element.
+
+    ``<``, ``>`` and ``&`` are written as JSON's ``\u003c``, ``\u003e``, ``\u0026`` (the same
+    string to a JSON parser), so no text from a task can close the element (``</script>``) or
+    switch the HTML parser into a script's escaped state (``<!--``, which took the rest of the
+    page with it: a task named ``<!--<script>`` left the program panel empty).
+    """
+    text = json.dumps(value, separators=(",", ":"))
+    return text.replace("<", "\\u003c").replace(">", "\\u003e").replace("&", "\\u0026")
+
+
 def view_html(scene: dict[str, Any]) -> str:
     """The self-contained page for a :func:`view_scene` document."""
     template = (resources.files("synth") / "data" / "view.html").read_text("utf-8")
     three, exports = _classic_three()
-    payload = json.dumps(scene, separators=(",", ":")).replace("</", "<\\/")
+    payload = script_json(scene)
     title = str(scene["title"]).replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
     values = {"TITLE": title, "SCENE": payload, "THREE": three, "THREE_EXPORTS": exports}
     return re.sub(r"@@([A-Z_]+)@@", lambda m: values[m.group(1)], template)
