@@ -159,6 +159,19 @@ def test_cli_writes_the_view(tmp_path: Path) -> None:
     assert main(["view", str(SEED_TASK), str(tmp_path / "missing.al"), "-o", str(out)]) == 2
 
 
+def test_a_program_that_never_moves_is_refused_with_why(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # No motion, no samples: it was exit 70, "ValueError: the trace has no samples".
+    al = tmp_path / "abort.al"
+    al.write_text('ABORT("NOT TODAY");\n', encoding="utf-8")
+    out = tmp_path / "view.html"
+    assert main(["view", str(SEED_TASK), str(al), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "the program ends (abort at line 1: NOT TODAY) before it makes a motion" in err
+    assert not out.exists()
+
+
 def test_text_from_the_task_cannot_break_out_of_the_scene_data() -> None:
     # A task named "<!--<script>" switched the HTML parser into a script's escaped state and
     # took the page's own script with it (the program panel stayed empty in Chromium).

@@ -36,6 +36,7 @@ import pinocchio as pin
 import trimesh
 from numpy.typing import NDArray
 
+from synth.exceptions import SynthError
 from synth.models.arm.bodies import Body
 from synth.models.arm.collision import body_at_opening
 from synth.replay.run import ReplayContext
@@ -190,7 +191,12 @@ def arm_body_poses(
 def view_scene(context: ReplayContext, trace: Trace, program_text: str) -> dict[str, Any]:
     """The page's JSON document (module docstring) from a replay context and its trace."""
     if not trace.samples:
-        raise ValueError("the trace has no samples")
+        report = trace.report
+        ended = f"{report.outcome} at line {report.line}" if report.line else report.outcome
+        raise SynthError(
+            f"the program ends ({ended}: {report.message}) before it makes a motion: "
+            "there is nothing to view"
+        )
     workcell = context.workcell.place(nominal_world(context.graph))
     bodies: list[dict[str, Any]] = []
     static_points = []
