@@ -19,6 +19,7 @@ def serve(
 ) -> int:
     """Run the service until interrupted; 2 on a configuration error (like any CLI error)."""
     import uvicorn
+    from uvicorn.config import STARTUP_FAILURE
 
     from server.connections import uvicorn_config
     from server.main import create_app
@@ -49,7 +50,13 @@ def serve(
     config = uvicorn_config(
         create_app(settings), settings, host, port, log_level="info", log_config=_log_config()
     )
-    uvicorn.Server(config).run()
+    try:
+        uvicorn.Server(config).run()
+    except SystemExit as exc:
+        if exc.code == STARTUP_FAILURE:  # uvicorn logged why (e.g. the port is in use)
+            print(f"synth serve: error: cannot listen on {host}:{port}", file=sys.stderr)
+            return 2
+        raise
     return 0
 
 

@@ -526,6 +526,17 @@ def _cmd_locate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _port(text: str) -> int:
+    """``--port``: a TCP port, 0 (any free one) to 65535."""
+    try:
+        port = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a port number: {text!r}") from None
+    if not 0 <= port <= 65535:
+        raise argparse.ArgumentTypeError(f"a port is 0 to 65535, got {port}")
+    return port
+
+
 def _cmd_serve(args: argparse.Namespace) -> int:
     from server.serve import serve
 
@@ -763,7 +774,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("serve", help="run the HTTP service (docs/api.md)")
     p.add_argument("--host", default="127.0.0.1", help="address to bind (default: 127.0.0.1)")
-    p.add_argument("--port", type=int, default=8000, help="port (default: 8000; 0: any free)")
+    p.add_argument("--port", type=_port, default=8000, help="port (default: 8000; 0: any free)")
     p.add_argument("--db", metavar="PATH|URL", help="SQLite file or SQLAlchemy URL ($SYNTH_DB)")
     p.add_argument("--token", help="bearer token required for writes ($SYNTH_TOKEN)")
     p.add_argument(

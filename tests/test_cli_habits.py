@@ -133,3 +133,31 @@ def test_seed_references_are_stripped_with_their_separators() -> None:
     )
     assert strip_seed_references("First order (seed Eqn 3.5.1): Δx") == "First order: Δx"
     assert strip_seed_references("no reference here (3 rings)") == "no reference here (3 rings)"
+
+
+def test_serve_refuses_a_port_it_cannot_use(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # --port 99999 was an OverflowError from bind() with two tracebacks (exit 70)
+    for port in ("99999", "-1", "http"):
+        with pytest.raises(SystemExit) as refused:
+            main(["serve", "--port", port])
+        assert refused.value.code == EXIT_USAGE
+        assert "argument --port:" in capsys.readouterr().err
+    # a port in use was uvicorn's own exit 3, a code the help does not list
+    import socket
+
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        done = subprocess.run(
+            [*SYNTH, "serve", "--port", str(port), "--db", str(tmp_path / "p.db")],
+            capture_output=True,
+            text=True,
+            timeout=120,
+            check=False,
+        )
+    assert done.returncode == EXIT_USAGE, done.stderr[-2000:]
+    assert f"synth serve: error: cannot listen on 127.0.0.1:{port}" in done.stderr
+    assert "Traceback" not in done.stderr
