@@ -28,7 +28,8 @@ uncertainty, never the planner's reduced one.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
+import re
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -43,6 +44,7 @@ from synth.models.believed import believed_graph
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
 from synth.models.spec import TaskSpec
+from synth.replay.goal import seated_message
 from synth.replay.proof import Proof, ProofOptions, prove
 from synth.replay.run import machine_for, run_machine
 from synth.replay.run import replay_context as replay_context
@@ -305,6 +307,32 @@ def _failing_line(proof: Proof) -> int | None:
     return None if proof.first_failure is None else proof.first_failure.line
 
 
+def _failing_message(proof: Proof) -> str:
+    if proof.nominal.outcome != "success":
+        return proof.nominal.message
+    return "" if proof.first_failure is None else proof.first_failure.message
+
+
+def _step_of_pin(message: str, steps: Sequence[SequenceStep]) -> int | None:
+    """The first step (0-based) whose goal verdict in ``message`` failed, or None.
+
+    A sequence's goal joins one verdict per step, in step order, with ``"; "``, each naming
+    its pin first (:func:`~synth.replay.goal.goal_verdict`: "PIN1 seated in BH1; PIN2 is not
+    in BH3: …"). A failed trial that ends without an AL line (the run completed, a pin is not
+    where it should be) is blamed on the first step whose verdict is not its seat.
+    """
+    met = {seated_message(s.pin, s.hole) for s in steps}
+    for verdict in message.split("; "):
+        if verdict in met:
+            continue
+        for k, step in enumerate(steps):
+            named = rf"(?:the hand (?:still holds|is not clear of) )?{re.escape(step.pin)}\b"
+            if re.match(named, verdict):
+                return k
+        return None
+    return None
+
+
 def _step_at(program: str, line: int | None, count: int) -> int | None:
     """Which step (0-based, in execution order) the program's ``line`` belongs to."""
     if line is None:
@@ -360,6 +388,8 @@ def _synthesize_sequence(
                     attempts=tuple(attempts),
                 )
             failed = _step_at(program, _failing_line(proof), len(sequence.steps))
+            if failed is None:  # a goal failure has no AL line: the verdict names the pin
+                failed = _step_of_pin(_failing_message(proof), steps)
             if failed is None:
                 break
             step = sequence.steps[failed]

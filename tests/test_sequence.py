@@ -15,14 +15,21 @@ import math
 import numpy as np
 import pinocchio as pin
 import pytest
-from _paths import GOLDEN, SEED_TASK, TASKS
+from _paths import DATA_TASKS, GOLDEN, SEED_TASK, TASKS
 
 from synth.cli import main
+from synth.codegen.sequence import SequenceStep
 from synth.errors.seat import after_seat, seat_error
 from synth.exceptions import SpecError
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task, parse_task
-from synth.pipeline import SequenceSynthesis, SynthesisOptions, _step_check, synthesize
+from synth.pipeline import (
+    SequenceSynthesis,
+    SynthesisOptions,
+    _step_check,
+    _step_of_pin,
+    synthesize,
+)
 from synth.replay.proof import ProofOptions
 from synth.replay.run import machine_for, replay_context, run_machine
 from synth.replay.truth import HandErrors, sample_world
@@ -226,3 +233,28 @@ def test_the_service_accepts_a_sequence(tmp_path):
     assert plan["program"].startswith("{ ASSEMBLY SEQUENCE: 2 STEPS")
     assert [s["hole"] for s in plan["steps"]] == ["PH1", "PH2"]
     assert plan["validation"]["nominal"]["outcome"] == "success"
+
+
+def test_a_goal_failure_is_blamed_on_the_first_step_whose_pin_is_not_seated() -> None:
+    steps = [SequenceStep("PIN1", "BH1", "", None), SequenceStep("PIN2", "BH3", "", None)]
+    both = "PIN1 is not in BH1: it is not in a hole; PIN2 is not in BH3: it is not in a hole"
+    assert _step_of_pin(both, steps) == 0
+    assert _step_of_pin("PIN1 seated in BH1; PIN2 is not in BH3: it rests on BOX", steps) == 1
+    assert _step_of_pin("PIN1 seated in BH1; the hand still holds PIN2", steps) == 1
+    assert _step_of_pin("the hand is not clear of PIN1 (0.05 cm); PIN2 seated in BH3", steps) == 0
+    assert _step_of_pin("PIN1 seated in BH1; PIN2 seated in BH3", steps) is None
+
+
+def test_a_sequence_whose_proof_fails_at_its_goal_plans_again() -> None:
+    # The sequence planner gave up ("1 of 1 candidates at proof") when the failed trial ended
+    # without an AL line: the goal verdict's pin now names the step, whose strategy is banned.
+    task = load_task(DATA_TASKS / "sequence_goal_failure.yaml")
+    options = SynthesisOptions(proof=ProofOptions(trials=30, seed=0, workers=1))
+    made = synthesize(task, options)
+    assert isinstance(made, SequenceSynthesis)
+    first, *_, last = made.attempts
+    assert len(made.attempts) >= 2 and last.proof.passed and not first.proof.passed
+    failure = first.proof.first_failure
+    assert failure is not None and failure.line is None
+    assert failure.message.startswith("PIN1 is not in BH1")
+    assert first.candidate.split(": ", 1)[1].split(", ")[0] != made.sequence.steps[0].strategy.name
