@@ -170,10 +170,10 @@ def parse_quantity(text: object, dim: Dimension) -> float:
     if isinstance(text, bool) or text is None:
         raise UnitError(f"expected a quantity with a unit of {dim}, got {text!r}")
     if isinstance(text, int | float):
+        value = float(text)
+        if not math.isfinite(value):  # JSON's 1e999: no unit would make it a quantity
+            raise UnitError(f"{text!r} is not a finite number")
         if dim == "dimensionless":
-            value = float(text)
-            if not math.isfinite(value):
-                raise UnitError(f"{text!r} is not a finite number")
             if abs(value) > MAX_MAGNITUDE[dim]:
                 raise UnitError(f"{text!r} is out of range (at most {MAX_MAGNITUDE[dim]:g})")
             return value
