@@ -170,7 +170,10 @@ def parse_quantity(text: object, dim: Dimension) -> float:
     if isinstance(text, bool) or text is None:
         raise UnitError(f"expected a quantity with a unit of {dim}, got {text!r}")
     if isinstance(text, int | float):
-        value = float(text)
+        try:
+            value = float(text)
+        except OverflowError:  # an int past 1.8e308 (a JSON body's integers are not bounded)
+            value = math.inf
         if not math.isfinite(value):  # JSON's 1e999: no unit would make it a quantity
             raise UnitError(f"{text!r} is not a finite number")
         if dim == "dimensionless":
