@@ -184,6 +184,12 @@ def test_free_order_takes_the_cheaper_order():
 
     reverse = plan_sequence(fixed, _step_check(TASKS, {}), base_dir=TASKS, compare=False)
     assert reverse.expected_time >= chosen.sequence.expected_time - 1e-9
+    # The service's plan listing reads a stored sequence's time and names (it showed null)
+    from server.routers.plans import _expected_time, _strategy_name
+
+    stored = json.loads(json.dumps(chosen.to_json()))
+    assert _expected_time(stored) == pytest.approx(chosen.sequence.expected_time, rel=1e-15)
+    assert _strategy_name(stored) == "; ".join(s.strategy.name for s in chosen.sequence.steps)
 
 
 def test_golden_sequence_program_has_its_steps_and_correction():

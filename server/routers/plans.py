@@ -41,13 +41,24 @@ router = APIRouter(prefix="/v1/plans", tags=["plans"])
 
 
 def _expected_time(result: dict[str, Any]) -> float | None:
-    """A stored plan's expected time [s]: ``strategy.time.expected_time``.
+    """A stored plan's expected time [s]: ``strategy.time.expected_time``, or a sequence's own.
 
     Rows stored before the times were named as in the text hold it as ``total``.
     """
+    if "steps" in result:  # an assembly sequence (SequenceSynthesis.to_json)
+        value = result.get("expected_time")
+        return None if value is None else float(value)
     times = (result.get("strategy") or {}).get("time") or {}
     value = times.get("expected_time", times.get("total"))
     return None if value is None else float(value)
+
+
+def _strategy_name(result: dict[str, Any]) -> str | None:
+    """A stored plan's strategy name; a sequence's is its steps' names in order, ``; ``-joined."""
+    if "steps" in result:
+        names = [str((step.get("strategy") or {}).get("name") or "?") for step in result["steps"]]
+        return "; ".join(names) or None
+    return (result.get("strategy") or {}).get("name") or None
 
 
 MAX_CURSOR = 2**63 - 1  # plan sequence numbers are SQL 64-bit integers
@@ -256,7 +267,7 @@ async def list_plans(
             id=p.id,
             task=p.task_name,
             created_at=p.created_at,
-            strategy=(p.result.get("strategy") or {}).get("name") or None,
+            strategy=_strategy_name(p.result),
             expected_time=_expected_time(p.result),
             validated=p.validation is not None,
             links=plan_links(p.id),
