@@ -13,8 +13,8 @@ from typing import Annotated
 from fastapi import Depends, FastAPI, Request
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 
-from server.exceptions import Unauthorized
-from server.service import PlanService
+from server.exceptions import Unauthorized, UnsupportedMediaType
+from server.service import JSON_MEDIA_TYPES, PlanService
 from server.settings import Settings, get_settings
 
 SettingsDep = Annotated[Settings, Depends(get_settings)]
@@ -66,11 +66,27 @@ def require_reader(settings: SettingsDep, credentials: Credentials) -> None:
         _check(settings, credentials)
 
 
+def require_json(request: Request) -> None:
+    """A JSON body route's media type: JSON (or none), else ``415`` before the body is read.
+
+    Without it a form post reached the body's validation and came back as a ``422`` "Input
+    should be a valid dictionary", not the ``415`` docs/api.md promises.
+    """
+    media = request.headers.get("content-type", "").split(";", 1)[0].strip().lower()
+    if media and media not in JSON_MEDIA_TYPES and not media.endswith("+json"):
+        raise UnsupportedMediaType(
+            f"this endpoint reads a JSON body, not {media!r} (Content-Type: application/json)",
+            accepted=sorted(JSON_MEDIA_TYPES),
+        )
+
+
 Writer = Depends(require_writer)
 Reader = Depends(require_reader)
+JsonBody = Depends(require_json)
 
 __all__ = [
     "Credentials",
+    "JsonBody",
     "Reader",
     "ServiceDep",
     "SettingsDep",

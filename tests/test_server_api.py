@@ -129,6 +129,15 @@ def test_malformed_bodies_are_422(client: TestClient, body: bytes, fragment: str
 def test_unsupported_media_type_is_415(client: TestClient) -> None:
     answer = problem(client.post("/v1/plans", data={"spec": SEED_TEXT}), 415)
     assert "application/yaml" in answer["accepted"]  # type: ignore[operator]
+    # The JSON routes too (a form post was a 422 "Input should be a valid dictionary")
+    for path in ("/v1/replays", "/v1/plans/batch"):
+        answer = problem(client.post(path, data={"spec": SEED_TEXT}), 415)
+        assert answer["accepted"] == ["application/json"]
+        plain = client.post(path, content=b"{}", headers={"Content-Type": "text/plain"})
+        problem(plain, 415)
+    schema = client.get("/openapi.json").json()
+    assert "415" in schema["paths"]["/v1/replays"]["post"]["responses"]
+    assert "415" in schema["paths"]["/v1/plans/batch"]["post"]["responses"]
 
 
 # -- model files stay inside the model directories ------------------------------------------------

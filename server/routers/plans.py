@@ -10,7 +10,7 @@ from fastapi.encoders import jsonable_encoder
 from fastapi.responses import JSONResponse, PlainTextResponse
 from pydantic import ValidationError
 
-from server.deps import Reader, ServiceDep, SettingsDep, Writer, client_key
+from server.deps import JsonBody, Reader, ServiceDep, SettingsDep, Writer, client_key
 from server.errors import PROBLEM_MEDIA_TYPE, problem_document, validation_problem
 from server.exceptions import InvalidRequest
 from server.routers.jobs import answer_submission
@@ -168,11 +168,11 @@ def _batch_item(index: int, raw: Any, settings: Settings) -> tuple[bytes, str, P
     "/batch",
     status_code=202,
     response_model=BatchOut,
-    dependencies=[Writer],
+    dependencies=[Writer, JsonBody],
     summary="Submit many tasks at once: each its own plan job, each answered on its own",
     responses={
         202: {"model": BatchOut, "description": "at least one task became a job"},
-        **problem_responses(400, 401, 408, 413, 422, 429, 500, 503),
+        **problem_responses(400, 401, 408, 413, 415, 422, 429, 500, 503),
     },
 )
 async def create_batch(

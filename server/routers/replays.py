@@ -6,7 +6,7 @@ from typing import Any
 
 from fastapi import APIRouter, Request, Response
 
-from server.deps import ServiceDep, SettingsDep, Writer, client_key
+from server.deps import JsonBody, ServiceDep, SettingsDep, Writer, client_key
 from server.routers.jobs import answer_submission
 from server.schemas import JobOut, ReplayIn, problem_responses
 from server.views import WaitQuery, checked_trials, checked_wait
@@ -18,7 +18,7 @@ router = APIRouter(prefix="/v1/replays", tags=["replays"])
     "",
     status_code=202,
     response_model=JobOut,
-    dependencies=[Writer],
+    dependencies=[Writer, JsonBody],
     summary="Submit a replay of an AL program against a task spec or a stored plan's task",
     responses={
         202: {
@@ -26,7 +26,7 @@ router = APIRouter(prefix="/v1/replays", tags=["replays"])
             "description": "the job is queued or running: follow `Location` (GET /v1/jobs/{id})",
         },
         201: {"model": JobOut, "description": "the job finished within `wait`"},
-        **problem_responses(400, 401, 404, 408, 413, 422, 429, 500, 503),
+        **problem_responses(400, 401, 404, 408, 413, 415, 422, 429, 500, 503),
     },
 )
 async def create_replay(
