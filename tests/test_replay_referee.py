@@ -299,44 +299,16 @@ def test_trial_output_keeps_at_most_k_failures_and_streams_json() -> None:
     assert json.loads(empty.getvalue()) == {"trials": [], "ok": False}
 
 
-@pytest.mark.parametrize("workers", ["1", "2"])
-def test_ctrl_c_stops_within_a_second_and_reports_the_trials_done(workers: str) -> None:
-    command = [str(SYNTH), *_replay_args(100_000, "--progress")]
+def _interrupted(workers: str, after: int, *extra: str) -> tuple[int, str, str, float]:
+    """A 100 000-trial replay in its own session, Ctrl-C'd once ``after`` trials are done.
+
+    SIGINT goes to the whole process group, as a terminal's does (a Dask cluster's workers
+    included). SIGINT at its default in the child: a test run started in the background of a
+    non-interactive shell ignores it, and a command started ignoring SIGINT keeps ignoring it.
+    Returns the exit code, stdout, stderr and the seconds from the signal to the exit.
+    """
+    command = [str(SYNTH), *_replay_args(100_000, "--progress", *extra)]
     command[command.index("--workers") + 1] = workers
-    # SIGINT at its default in the child: a test run started in the background of a
-    # non-interactive shell ignores it, and a command started ignoring SIGINT keeps ignoring it
-    process = subprocess.Popen(
-        command,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        cwd=ROOT,
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
-    )
-    assert process.stderr is not None
-    seen = ""
-    deadline = time.monotonic() + 180
-    while time.monotonic() < deadline and " 3/100000" not in seen:  # a few trials done
-        seen += process.stderr.read(1)
-    sent = time.monotonic()
-    process.send_signal(signal.SIGINT)
-    out, _ = process.communicate(timeout=30)
-    took = time.monotonic() - sent
-    assert process.returncode == 130
-    # "within a second" on an idle machine; 3 s leaves room for a loaded CI runner
-    assert took < 3.0, took
-    line = next(x for x in out.splitlines() if "interrupted:" in x)
-    done = int(line.split("interrupted: ")[1].split(" of ")[0])
-    assert done >= 3 and "of 100000 trials done" in line
-    assert f"Monte Carlo: {done} trials (seed 0)" in out
-
-
-def test_ctrl_c_on_a_local_dask_cluster_reports_without_worker_tracebacks() -> None:
-    pytest.importorskip("distributed")
-    command = [str(SYNTH), *_replay_args(100_000, "--progress", "--dask", "local")]
-    command[command.index("--workers") + 1] = "2"
-    # A terminal's Ctrl-C goes to the whole process group, the cluster's workers included:
-    # its own session, so the signal reaches this command's group alone.
     process = subprocess.Popen(
         command,
         stdout=subprocess.PIPE,
@@ -349,13 +321,30 @@ def test_ctrl_c_on_a_local_dask_cluster_reports_without_worker_tracebacks() -> N
     assert process.stderr is not None
     seen = ""
     deadline = time.monotonic() + 180
-    while time.monotonic() < deadline and " 9/100000" not in seen:  # a chunk or two done
+    while time.monotonic() < deadline and f" {after}/100000" not in seen:
         seen += process.stderr.read(1)
     sent = time.monotonic()
     os.killpg(process.pid, signal.SIGINT)
     out, err = process.communicate(timeout=60)
-    took = time.monotonic() - sent
-    assert process.returncode == 130
-    assert took < 5.0, took  # the running chunks of 8 trials (≈ 25 ms each) finish first
+    return process.returncode, out, seen + err, time.monotonic() - sent
+
+
+@pytest.mark.parametrize("workers", ["1", "2"])
+def test_ctrl_c_stops_within_a_second_and_reports_the_trials_done(workers: str) -> None:
+    code, out, _, took = _interrupted(workers, 3)
+    assert code == 130
+    # "within a second" on an idle machine; 3 s leaves room for a loaded CI runner
+    assert took < 3.0, took
+    line = next(x for x in out.splitlines() if "interrupted:" in x)
+    done = int(line.split("interrupted: ")[1].split(" of ")[0])
+    assert done >= 3 and "of 100000 trials done" in line
+    assert f"Monte Carlo: {done} trials (seed 0)" in out
+
+
+def test_ctrl_c_on_a_local_dask_cluster_reports_without_worker_tracebacks() -> None:
+    pytest.importorskip("distributed")
+    code, out, err, took = _interrupted("2", 9, "--dask", "local")  # a chunk or two done
+    assert code == 130
+    assert took < 5.0, took  # each worker's running trial (≈ 25 ms) ends first
     assert "Traceback" not in err and "KeyboardInterrupt" not in err, err[-2000:]
     assert "interrupted:" in out and "of 100000 trials done" in out
