@@ -423,7 +423,7 @@ def _add_replay_parser(sub: Any) -> None:
         default=DEFAULT_TRIALS,
         help=f"Monte Carlo trials in sampled true worlds (default: {DEFAULT_TRIALS}; 0: none)",
     )
-    p.add_argument("--seed", type=int, default=0, help="random seed of the trials (default: 0)")
+    p.add_argument("--seed", type=_seed, default=0, help="random seed of the trials (default: 0)")
     add_workers_argument(p, "the trials")
     p.add_argument(
         "--distribution",
@@ -524,6 +524,17 @@ def _cmd_locate(args: argparse.Namespace) -> int:
     else:
         print(locate_report(results, AttributeGraph(spec), constraints=args.constraints))
     return 0
+
+
+def _seed(text: str) -> int:
+    """``--seed``: a non-negative integer (numpy's seeds are; the service refuses others too)."""
+    try:
+        seed = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if seed < 0:
+        raise argparse.ArgumentTypeError(f"a seed is 0 or more, got {seed}")
+    return seed
 
 
 def _port(text: str) -> int:
@@ -753,7 +764,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="success rate the proof must reach (default: the task's proof.min_success, else "
         f"{DEFAULT_MIN_SUCCESS:g})",
     )
-    p.add_argument("--seed", type=int, default=0, help="random seed of the proof (default: 0)")
+    p.add_argument("--seed", type=_seed, default=0, help="random seed of the proof (default: 0)")
     add_workers_argument(p, "the proof's trials")
     p.set_defaults(func=_cmd_plan)
 

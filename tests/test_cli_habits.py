@@ -161,3 +161,15 @@ def test_serve_refuses_a_port_it_cannot_use(
     assert done.returncode == EXIT_USAGE, done.stderr[-2000:]
     assert f"synth serve: error: cannot listen on 127.0.0.1:{port}" in done.stderr
     assert "Traceback" not in done.stderr
+
+
+def test_a_negative_seed_is_a_usage_error(capsys: pytest.CaptureFixture[str]) -> None:
+    # numpy's generators take non-negative seeds, and the service refuses others (422)
+    for command in (
+        ["plan", str(SEED_TASK)],
+        ["replay", str(SEED_PROGRAM), "--task", str(SEED_TASK)],
+    ):
+        with pytest.raises(SystemExit) as refused:
+            main([*command, "--seed", "-1"])
+        assert refused.value.code == EXIT_USAGE
+        assert "argument --seed: a seed is 0 or more, got -1" in capsys.readouterr().err
