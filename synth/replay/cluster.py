@@ -52,7 +52,7 @@ _STOP_EVERY_S = 0.2
 
 
 def _run_chunk_serial(
-    job: TrialJob, seed: int, start: int, stop: int, stopped: str | None = None
+    job: TrialJob, seed: int, start: int, stop: int, stopped: str
 ) -> list[RunReport]:
     """:func:`~synth.replay.trials.run_chunk`, one at a time in a worker process.
 
@@ -61,11 +61,9 @@ def _run_chunk_serial(
     ~1 ms), so a running chunk ends one trial after the stop instead of running its trials
     out while the cluster waits to close. Its runs are then partial, and nobody reads them.
     """
-    with _LOCK:
-        if stopped is None:
-            return run_chunk(job, seed, start, stop)
-        from distributed import Event
+    from distributed import Event
 
+    with _LOCK:
         event, runs, asked = Event(stopped), [], time.monotonic()
         for i in range(start, stop):
             runs += run_chunk(job, seed, i, i + 1)
