@@ -14,7 +14,7 @@ from fastapi import Depends, FastAPI, Request
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 
 from server.exceptions import Unauthorized, UnsupportedMediaType
-from server.service import JSON_MEDIA_TYPES, PlanService
+from server.service import JSON_MEDIA_TYPES, PlanService, is_json_media, media_type
 from server.settings import Settings, get_settings
 
 SettingsDep = Annotated[Settings, Depends(get_settings)]
@@ -72,8 +72,8 @@ def require_json(request: Request) -> None:
     Without it a form post reached the body's validation and came back as a ``422`` "Input
     should be a valid dictionary", not the ``415`` docs/api.md promises.
     """
-    media = request.headers.get("content-type", "").split(";", 1)[0].strip().lower()
-    if media and media not in JSON_MEDIA_TYPES and not media.endswith("+json"):
+    media = media_type(request.headers.get("content-type"))
+    if media and not is_json_media(media):
         raise UnsupportedMediaType(
             f"this endpoint reads a JSON body, not {media!r} (Content-Type: application/json)",
             accepted=sorted(JSON_MEDIA_TYPES),

@@ -49,15 +49,25 @@ ACCEPTED_MEDIA_TYPES = tuple(sorted(YAML_MEDIA_TYPES | JSON_MEDIA_TYPES))
 # -- spec bodies ------------------------------------------------------------------------------
 
 
+def media_type(content_type: str | None) -> str:
+    """A ``Content-Type`` header's media type, lower case, without its parameters ("" if none)."""
+    return (content_type or "").split(";", 1)[0].strip().lower()
+
+
+def is_json_media(media: str) -> bool:
+    """Whether a :func:`media_type` is JSON (``application/json`` or any ``+json`` type)."""
+    return media in JSON_MEDIA_TYPES or media.endswith("+json")
+
+
 def spec_kind(content_type: str | None) -> SpecKind:
     """``"yaml"`` or ``"json"`` for a request's ``Content-Type``; 415 for anything else.
 
     No content type means YAML (of which JSON is a subset).
     """
-    media = (content_type or "").split(";", 1)[0].strip().lower()
+    media = media_type(content_type)
     if not media or media in YAML_MEDIA_TYPES:
         return "yaml"
-    if media in JSON_MEDIA_TYPES or media.endswith("+json"):
+    if is_json_media(media):
         return "json"
     raise UnsupportedMediaType(
         f"cannot read a task spec sent as {media!r}; send YAML (Content-Type: application/yaml) "
