@@ -526,26 +526,26 @@ def _cmd_locate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _seed(text: str) -> int:
-    """``--seed``: a non-negative integer (numpy's seeds are; the service refuses others too)."""
-    try:
-        seed = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if seed < 0:
-        raise argparse.ArgumentTypeError(f"a seed is 0 or more, got {seed}")
-    return seed
+def _integer_from_zero(noun: str, most: int | None = None) -> Callable[[str], int]:
+    """An argparse type: an integer from 0 to ``most`` (no bound when None), named ``noun``."""
+    allowed = "0 or more" if most is None else f"0 to {most}"
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+        if value < 0 or (most is not None and value > most):
+            raise argparse.ArgumentTypeError(f"a {noun} is {allowed}, got {value}")
+        return value
+
+    return parse
 
 
-def _port(text: str) -> int:
-    """``--port``: a TCP port, 0 (any free one) to 65535."""
-    try:
-        port = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a port number: {text!r}") from None
-    if not 0 <= port <= 65535:
-        raise argparse.ArgumentTypeError(f"a port is 0 to 65535, got {port}")
-    return port
+_seed = _integer_from_zero("seed")
+"""``--seed``: numpy's generators take non-negative seeds, and the service refuses others."""
+_port = _integer_from_zero("port", 65535)
+"""``--port``: a TCP port, 0 (any free one) to 65535."""
 
 
 def _cmd_serve(args: argparse.Namespace) -> int:
