@@ -28,8 +28,7 @@ uncertainty, never the planner's reduced one.
 from __future__ import annotations
 
 import dataclasses
-import re
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -44,7 +43,6 @@ from synth.models.believed import believed_graph
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
 from synth.models.spec import TaskSpec
-from synth.replay.goal import seated_message
 from synth.replay.proof import Proof, ProofOptions, prove
 from synth.replay.run import machine_for, run_machine
 from synth.replay.run import replay_context as replay_context
@@ -307,30 +305,11 @@ def _failing_line(proof: Proof) -> int | None:
     return None if proof.first_failure is None else proof.first_failure.line
 
 
-def _failing_message(proof: Proof) -> str:
+def _failing_pin(proof: Proof) -> str | None:
+    """The pin whose goal the failed run did not meet (a run that completed has no AL line)."""
     if proof.nominal.outcome != "success":
-        return proof.nominal.message
-    return "" if proof.first_failure is None else proof.first_failure.message
-
-
-def _step_of_pin(message: str, steps: Sequence[SequenceStep]) -> int | None:
-    """The first step (0-based) whose goal verdict in ``message`` failed, or None.
-
-    A sequence's goal joins one verdict per step, in step order, with ``"; "``, each naming
-    its pin first (:func:`~synth.replay.goal.goal_verdict`: "PIN1 seated in BH1; PIN2 is not
-    in BH3: …"). A failed trial that ends without an AL line (the run completed, a pin is not
-    where it should be) is blamed on the first step whose verdict is not its seat.
-    """
-    met = {seated_message(s.pin, s.hole) for s in steps}
-    for verdict in message.split("; "):
-        if verdict in met:
-            continue
-        for k, step in enumerate(steps):
-            named = rf"(?:the hand (?:still holds|is not clear of) )?{re.escape(step.pin)}\b"
-            if re.match(named, verdict):
-                return k
-        return None
-    return None
+        return proof.nominal.unmet
+    return None if proof.first_failure is None else proof.first_failure.unmet
 
 
 def _step_at(program: str, line: int | None, count: int) -> int | None:
@@ -388,8 +367,9 @@ def _synthesize_sequence(
                     attempts=tuple(attempts),
                 )
             failed = _step_at(program, _failing_line(proof), len(sequence.steps))
-            if failed is None:  # a goal failure has no AL line: the verdict names the pin
-                failed = _step_of_pin(_failing_message(proof), steps)
+            if failed is None:  # a goal failure has no AL line: blame its unseated pin's step
+                unmet = _failing_pin(proof)
+                failed = next((k for k, s in enumerate(steps) if s.pin == unmet), None)
             if failed is None:
                 break
             step = sequence.steps[failed]

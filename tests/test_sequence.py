@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import math
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -18,7 +19,6 @@ import pytest
 from _paths import DATA_TASKS, GOLDEN, SEED_TASK, TASKS
 
 from synth.cli import main
-from synth.codegen.sequence import SequenceStep
 from synth.errors.seat import after_seat, seat_error
 from synth.exceptions import SpecError
 from synth.models.graph import AttributeGraph
@@ -27,12 +27,11 @@ from synth.pipeline import (
     SequenceSynthesis,
     SynthesisOptions,
     _step_check,
-    _step_of_pin,
     synthesize,
 )
 from synth.replay.proof import ProofOptions
 from synth.replay.run import machine_for, replay_context, run_machine
-from synth.replay.truth import HandErrors, sample_world
+from synth.replay.truth import HandErrors, nominal_world, sample_world
 from synth.strategies.sequence import plan_sequence
 
 TWO = TASKS / "seed_box_two_pins.yaml"
@@ -241,14 +240,26 @@ def test_the_service_accepts_a_sequence(tmp_path):
     assert plan["validation"]["nominal"]["outcome"] == "success"
 
 
-def test_a_goal_failure_is_blamed_on_the_first_step_whose_pin_is_not_seated() -> None:
-    steps = [SequenceStep("PIN1", "BH1", "", None), SequenceStep("PIN2", "BH3", "", None)]
-    both = "PIN1 is not in BH1: it is not in a hole; PIN2 is not in BH3: it is not in a hole"
-    assert _step_of_pin(both, steps) == 0
-    assert _step_of_pin("PIN1 seated in BH1; PIN2 is not in BH3: it rests on BOX", steps) == 1
-    assert _step_of_pin("PIN1 seated in BH1; the hand still holds PIN2", steps) == 1
-    assert _step_of_pin("the hand is not clear of PIN1 (0.05 cm); PIN2 seated in BH3", steps) == 0
-    assert _step_of_pin("PIN1 seated in BH1; PIN2 seated in BH3", steps) is None
+def test_a_goal_failure_names_the_first_step_whose_pin_is_not_seated() -> None:
+    # The golden two-pin program cut before step 2: PIN1 seated in BH1, PIN2 still in its rack.
+    text = (GOLDEN / "seed_box_two_pins.al").read_text(encoding="utf-8")
+    first_step = text[: text.index("{ STEP 2")]
+    context = replay_context(first_step, TWO)
+    report, _ = run_machine(context, machine_for(context, *_nominal(context)))
+    assert (report.outcome, report.line, report.unmet) == ("failure", None, "PIN2")
+    assert report.message == "PIN1 seated in BH1; PIN2 is in RH2, not in BH2"
+    # Nothing done: both unseated, the first step's pin is named.
+    context = replay_context("BEGIN END", TWO)
+    report, _ = run_machine(context, machine_for(context, *_nominal(context)))
+    assert (report.outcome, report.unmet) == ("failure", "PIN1")
+    # The whole program meets every goal: no pin is named.
+    context = replay_context(text, TWO)
+    report, _ = run_machine(context, machine_for(context, *_nominal(context)))
+    assert (report.outcome, report.unmet) == ("success", None)
+
+
+def _nominal(context: Any) -> tuple[Any, HandErrors]:
+    return nominal_world(context.graph), HandErrors.none()
 
 
 def test_a_sequence_whose_proof_fails_at_its_goal_plans_again() -> None:
@@ -262,5 +273,5 @@ def test_a_sequence_whose_proof_fails_at_its_goal_plans_again() -> None:
     assert len(made.attempts) >= 2 and last.proof.passed and not first.proof.passed
     failure = first.proof.first_failure
     assert failure is not None and failure.line is None
-    assert failure.message.startswith("PIN1 is not in BH1")
+    assert failure.message.startswith("PIN1 is not in BH1") and failure.unmet == "PIN1"
     assert first.candidate.split(": ", 1)[1].split(", ")[0] != made.sequence.steps[0].strategy.name

@@ -20,7 +20,7 @@ from synth.replay.capture import seat_depth
 from synth.replay.cell import PinState, ReplayOptions
 from synth.replay.sweeps import pair_distances
 
-__all__ = ["goal_verdict", "seated_message"]
+__all__ = ["goal_verdict"]
 
 
 def goal_verdict(
@@ -58,12 +58,4 @@ def goal_verdict(
     near = pair_distances(cell, q, pairs)
     if near and min(near) < options.clear_distance:
         return False, f"the hand is not clear of {name} ({100 * min(near):.2f} cm)"
-    return True, seated_message(name, target.name)
-
-
-def seated_message(pin_name: str, hole_name: str) -> str:
-    """The verdict of a met goal: ``PIN1 seated in BH1``.
-
-    A sequence's report joins one verdict per step with ``"; "`` (:mod:`synth.replay.run`).
-    """
-    return f"{pin_name} seated in {hole_name}"
+    return True, f"{name} seated in {target.name}"

@@ -135,6 +135,8 @@ class FailedTrial:
     line: int | None
     message: str
     errors: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
+    unmet: str | None = None
+    """The first pin whose goal is not met (:attr:`~synth.replay.report.RunReport.unmet`)."""
 
     def describe(self) -> str:
         """``trial 7: abort at AL line 31: ... (sampled box x=+0.61 cm, rz=−4.2°)``."""
@@ -352,9 +354,8 @@ def prove(
     failed = None
     if first is not None:
         index, run = first
-        failed = FailedTrial(
-            index, run.outcome, run.line, run.message, trial_errors(context, opts.seed, index)
-        )
+        errors = trial_errors(context, opts.seed, index)
+        failed = FailedTrial(index, run.outcome, run.line, run.message, errors, run.unmet)
     return Proof(
         options=opts,
         nominal=nominal,

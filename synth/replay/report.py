@@ -65,6 +65,8 @@ class RunReport:
     """One run of the program: its outcome, message, AL line, time [s] and statements executed.
 
     ``line`` is the AL line of the ABORT, the runtime error or the violation (None otherwise).
+    ``unmet`` is the AL name of the first step's pin whose goal is not met, for a ``failure``
+    of the task's goal (the run completed; a sequence's planner blames that step).
     """
 
     outcome: Outcome
@@ -73,6 +75,7 @@ class RunReport:
     time: float
     statements: int
     violations: tuple[Violation, ...] = ()
+    unmet: str | None = None
 
     @property
     def success(self) -> bool:

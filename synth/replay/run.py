@@ -226,7 +226,15 @@ def run_machine(context: ReplayContext, machine: ReplayMachine) -> tuple[RunRepo
     ]
     outcome: Outcome = "success" if all(ok for ok, _ in verdicts) else "failure"
     why = "; ".join(w for _, w in verdicts)
-    return RunReport(outcome, why, None, result.time, result.statements), interpreter
+    unmet = next(
+        (
+            context.graph.al_names[context.graph.resolve(s.pin)]
+            for s, (ok, _) in zip(steps, verdicts, strict=True)
+            if not ok
+        ),
+        None,
+    )
+    return RunReport(outcome, why, None, result.time, result.statements, unmet=unmet), interpreter
 
 
 def run_world(context: ReplayContext, world: TrueWorld, hand_errors: HandErrors) -> RunReport:
