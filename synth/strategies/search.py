@@ -75,9 +75,9 @@ def coverage(
     tried = np.vstack([np.zeros((1, 2)), points[inside(points, dx + margin, dy + margin)]])
     tree = cKDTree(tried)
     hx, hy = dx / GRID, dy / GRID  # [m] half-sides of the first cells
-    edges_x = -dx + (2 * np.arange(GRID) + 1) * hx
-    edges_y = -dy + (2 * np.arange(GRID) + 1) * hy
-    centres = np.stack(np.meshgrid(edges_x, edges_y), axis=-1).reshape(-1, 2)
+    xs = -dx + (2 * np.arange(GRID) + 1) * hx  # the first cells' centres
+    ys = -dy + (2 * np.arange(GRID) + 1) * hy
+    centres = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)
     worst = 0.0
     for depth in range(SPLITS + 1):
         d, _ = tree.query(centres)
