@@ -227,11 +227,16 @@ async def _on_request_validation(_request: Request, exc: Exception) -> JSONRespo
 
 async def _on_http_exception(_request: Request, exc: Exception) -> JSONResponse:
     assert isinstance(exc, StarletteHTTPException)
+    detail = str(exc.detail)
+    cause = exc.__cause__
+    if exc.status_code == 400 and isinstance(cause, UnicodeDecodeError):
+        # FastAPI's "There was an error parsing the body" does not say what was wrong
+        detail = f"the body is not UTF-8 text (byte {cause.start}): send JSON as UTF-8"
     body = {
         "type": "about:blank",
         "title": _HTTP_TITLES.get(exc.status_code, "HTTP error"),
         "status": exc.status_code,
-        "detail": str(exc.detail),
+        "detail": detail,
     }
     return JSONResponse(
         body,

@@ -25,7 +25,7 @@ from fastapi.staticfiles import StaticFiles
 import synth
 from server import service
 from server.db import PlanStore
-from server.deps import current_settings
+from server.deps import KnownQuery, current_settings
 from server.errors import install_error_handlers
 from server.lanes import Lanes
 from server.limits import BodyLimitMiddleware
@@ -87,11 +87,11 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     install_error_handlers(app)  # last: its middleware wraps the others
     app.mount("/static", StaticFiles(directory=STATIC), name="static")
     _add_docs(app)
-    app.include_router(health.router)
-    app.include_router(plans.router)
-    app.include_router(jobs.router)
-    app.include_router(replays.router)
-    app.include_router(pictures.router)
+    app.include_router(health.router, dependencies=[KnownQuery])
+    app.include_router(plans.router, dependencies=[KnownQuery])
+    app.include_router(jobs.router, dependencies=[KnownQuery])
+    app.include_router(replays.router, dependencies=[KnownQuery])
+    app.include_router(pictures.router, dependencies=[KnownQuery])
     return app
 
 

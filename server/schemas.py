@@ -9,7 +9,40 @@ from __future__ import annotations
 from datetime import datetime
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, WithJsonSchema, model_validator
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    WithJsonSchema,
+    model_validator,
+)
+from pydantic_core import PydanticCustomError
+
+_JSON_KINDS = {bool: "a boolean", int: "a number", float: "a number", list: "an array"}
+
+
+def _spec_body(value: Any, *, optional: bool) -> Any:
+    """A spec field's value: YAML text or a JSON object, else one error naming what it was.
+
+    Left to the union, a number came back as two errors under pydantic's branch names
+    (``spec.dict[str,any]``, ``spec.str``).
+    """
+    if isinstance(value, dict | str) or (optional and value is None):
+        return value
+    kind = "null" if value is None else _JSON_KINDS.get(type(value), type(value).__name__)
+    raise PydanticCustomError(
+        "spec_type", "a task spec is YAML text or a JSON object, not {kind}", {"kind": kind}
+    )
+
+
+SpecBody = Annotated[
+    dict[str, Any] | str, BeforeValidator(lambda value: _spec_body(value, optional=False))
+]
+"""A request's task spec: YAML text or a JSON object."""
+OptionalSpecBody = Annotated[
+    dict[str, Any] | str | None, BeforeValidator(lambda value: _spec_body(value, optional=True))
+]
 
 
 class Problem(BaseModel):
@@ -141,6 +174,7 @@ class ReplayIn(BaseModel):
 
     model_config = ConfigDict(
         extra="forbid",
+        strict=True,  # JSON true is not 1 trial, nor "8" eight
         json_schema_extra={
             "examples": [
                 {"plan_id": "3f2c0a9e5b7d4e1f8a6c2b0d9e7f5a31", "trials": 20, "seed": 1},
@@ -150,7 +184,7 @@ class ReplayIn(BaseModel):
     )
 
     program: str | None = Field(default=None, description="AL program text")
-    spec: dict[str, Any] | str | None = Field(
+    spec: OptionalSpecBody = Field(
         default=None, description="task spec: a JSON object, or YAML text"
     )
     plan_id: str | None = Field(default=None, description="a stored plan's id")
@@ -248,9 +282,9 @@ class JobOut(BaseModel):
 class BatchTaskIn(BaseModel):
     """One task of a batch: the spec and its planning options (the query of POST /v1/plans)."""
 
-    model_config = ConfigDict(extra="forbid", populate_by_name=True)
+    model_config = ConfigDict(extra="forbid", populate_by_name=True, strict=True)
 
-    spec: dict[str, Any] | str = Field(description="task spec: a JSON object, or YAML text")
+    spec: SpecBody = Field(description="task spec: a JSON object, or YAML text")
     trials: int | None = Field(
         default=None, ge=0, description="Monte Carlo trials (default: the server's)"
     )

@@ -140,6 +140,73 @@ def test_unsupported_media_type_is_415(client: TestClient) -> None:
     assert "415" in schema["paths"]["/v1/plans/batch"]["post"]["responses"]
 
 
+@pytest.mark.parametrize(
+    ("path", "name", "near"),
+    [
+        ("/v1/plans?trails=5&validate=false", "trails", "trials"),
+        ("/v1/plans?limt=5", "limt", "limit"),
+        ("/healthz?verbose=1", "verbose", None),
+    ],
+)
+def test_unknown_query_parameter_is_named(
+    client: TestClient, path: str, name: str, near: str | None
+) -> None:
+    # Ignored, a typo planned with the server's default trials and said nothing
+    method = client.post if path.startswith("/v1/plans?t") else client.get
+    kwargs = {"content": SEED_TEXT, "headers": YAML} if method == client.post else {}
+    answer = problem(method(path, **kwargs), 422)  # type: ignore[operator]
+    assert answer["parameter"] == name
+    assert (f"did you mean {near!r}" in str(answer["detail"])) == (near is not None)
+    assert client.get("/v1/plans?limit=5").status_code == 200  # the route's own still work
+
+
+@pytest.mark.parametrize(
+    ("field", "value"), [("trials", True), ("trials", "3"), ("seed", 1.0), ("seed", False)]
+)
+def test_json_numbers_are_numbers(client: TestClient, field: str, value: object) -> None:
+    # JSON true was one trial, "3" three: a JSON body's integers are JSON integers
+    replay = {"program": "BEGIN END", "spec": SEED_TEXT, field: value}
+    answer = problem(client.post("/v1/replays", json=replay), 422)
+    assert str(answer["detail"]).startswith(f"body.{field}: ")
+    batch = {"tasks": [{"spec": SEED_TEXT, field: value}]}
+    item = problem(client.post("/v1/plans/batch", json=batch), 422)["items"][0]  # type: ignore[index]
+    assert item["problem"]["errors"][0]["loc"] == ["tasks", 0, field]
+
+
+@pytest.mark.parametrize(("value", "kind"), [(5, "a number"), ([1], "an array"), (None, "null")])
+def test_a_spec_of_the_wrong_type_is_one_error(
+    client: TestClient, value: object, kind: str
+) -> None:
+    # Left to pydantic's union it was two errors under its branch names (spec.dict[str,any])
+    batch = {"tasks": [{"spec": value}]}
+    item = problem(client.post("/v1/plans/batch", json=batch), 422)["items"][0]  # type: ignore[index]
+    assert item["problem"]["errors"] == [
+        {
+            "loc": ["tasks", 0, "spec"],
+            "msg": f"a task spec is YAML text or a JSON object, not {kind}",
+        }
+    ]
+    if value is not None:  # a replay's spec may be null (then plan_id is needed)
+        replay = {"program": "BEGIN END", "spec": value}
+        answer = problem(client.post("/v1/replays", json=replay), 422)
+        assert (
+            answer["detail"] == f"body.spec: a task spec is YAML text or a JSON object, not {kind}"
+        )
+
+
+def test_a_json_body_that_is_not_utf8_says_so(client: TestClient) -> None:
+    # FastAPI's own answer was "There was an error parsing the body"
+    body = b'{"program": "\xff", "spec": "x"}'
+    answer = problem(
+        client.post("/v1/replays", content=body, headers={"Content-Type": "application/json"}),
+        400,
+    )
+    assert (
+        answer["detail"]
+        == f"the body is not UTF-8 text (byte {body.index(0xFF)}): send JSON as UTF-8"
+    )
+
+
 # -- model files stay inside the model directories ------------------------------------------------
 
 
