@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 import synth.replay.trials as trials_module
-from synth import cli
-from synth.cli import resolve_workers
+from synth.cli import arguments
+from synth.cli.arguments import resolve_workers
 from synth.cores import available_cores
 from synth.exceptions import SynthError
 from synth.replay.report import RunReport
@@ -134,5 +134,5 @@ def test_workers_are_capped_at_the_cores_with_a_message() -> None:
 
 def test_a_trial_pool_never_has_more_workers_than_cores(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(trials_module, "available_cores", lambda: 3)
-    monkeypatch.setattr(cli, "available_cores", lambda: 3)
+    monkeypatch.setattr(arguments, "available_cores", lambda: 3)
     assert TrialPool(1000).workers == 3 and TrialPool(2).workers == 2

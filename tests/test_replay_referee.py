@@ -55,7 +55,8 @@ import numpy as np
 import pytest
 from _paths import ROOT, SEED_PROGRAM, SEED_SEARCH, SEED_TASK
 
-from synth.cli import _TrialOutput, main
+from synth.cli import main
+from synth.cli.replay import _TrialOutput
 from synth.replay import ReplayOptions, machine_for, replay_context, replay_program, run_trial
 from synth.replay.report import RunReport
 from synth.replay.run import TrialRecord, trial_errors
