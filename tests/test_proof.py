@@ -212,9 +212,13 @@ def test_cli_reports_the_proof_and_checks_its_options(tmp_path, capsys) -> None:
     assert main(["plan", str(SEED_TASK), "--proof-trials", "0", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["proof"]["passed"] and doc["proof"]["decided_by"] == "nominal-only"
-    for bad in (["--min-success", "1.5"], ["--proof-trials", "-1"], ["--workers", "0"]):
-        assert main(["plan", str(SEED_TASK), *bad]) == 2
-        assert bad[0] in capsys.readouterr().err
+    for bad in (["--min-success", "1.5"], ["--proof-trials", "-1"]):
+        with pytest.raises(SystemExit) as refused:  # argparse's usage error, before planning
+            main(["plan", str(SEED_TASK), *bad])
+        assert refused.value.code == 2
+        assert f"argument {bad[0]}: " in capsys.readouterr().err
+    assert main(["plan", str(SEED_TASK), "--workers", "0"]) == 2
+    assert "--workers must be 1 or more" in capsys.readouterr().err
 
 
 def test_a_pin_from_an_uncertain_rack_is_relocated_after_center_and_proven() -> None:

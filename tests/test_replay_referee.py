@@ -247,12 +247,16 @@ def test_one_trial_alone_is_the_trial_of_the_full_run(capsys: pytest.CaptureFixt
 
 def test_diagnostic_options_are_checked(capsys: pytest.CaptureFixture[str]) -> None:
     for option, value, rule in (
-        ("--min-success", "1.5", "between 0 and 1"),
-        ("--failures", "-1", "0 or more"),
-        ("--trial", "-2", "0 or more"),
+        ("--min-success", "1.5", "a success rate is between 0 and 1, got 1.5"),
+        ("--min-success", "nan", "a success rate is between 0 and 1, got nan"),
+        ("--failures", "-1", "a count is 0 or more, got -1"),
+        ("--trial", "-2", "a trial index is 0 or more, got -2"),
+        ("--trials", "-3", "a count is 0 or more, got -3"),
     ):
-        assert main(_replay_args(2, option, value)) == 2
-        assert f"{option} must be {rule}" in capsys.readouterr().err
+        with pytest.raises(SystemExit) as refused:  # argparse's usage error
+            main(_replay_args(2, option, value))
+        assert refused.value.code == 2
+        assert f"argument {option}: {rule}" in capsys.readouterr().err
     # A bound on a rate with no rate to compare it with would never fail: refused.
     for extra, reason in (((), "--trials is 0"), (("--trial", "3"), "--trial I re-runs one")):
         assert main(_replay_args(0 if not extra else 2, *extra, "--min-success", "0.9")) == 2

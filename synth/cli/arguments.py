@@ -102,3 +102,18 @@ SEED = integer_from_zero("seed")
 """``--seed``: numpy's generators take non-negative seeds, and the service refuses others."""
 PORT = integer_from_zero("port", 65535)
 """``--port``: a TCP port, 0 (any free one) to 65535."""
+COUNT = integer_from_zero("count")
+"""``--trials``, ``--proof-trials``, ``--failures``: how many, 0 (none) or more."""
+INDEX = integer_from_zero("trial index")
+"""``--trial``: a Monte Carlo trial's index, from 0."""
+
+
+def rate(text: str) -> float:
+    """An argparse type: a success rate, a number from 0 to 1 (``--min-success``)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not 0.0 <= value <= 1.0:  # NaN too
+        raise argparse.ArgumentTypeError(f"a success rate is between 0 and 1, got {text}")
+    return value

@@ -6,9 +6,8 @@ import argparse
 import json
 from typing import Any
 
-from synth.cli.arguments import PORT, add_workers_argument, resolve_workers
+from synth.cli.arguments import COUNT, PORT, add_workers_argument, resolve_workers
 from synth.cli.files import read_program, write_output
-from synth.exceptions import SynthError
 
 
 def _cmd_errors(args: argparse.Namespace) -> int:
@@ -57,8 +56,6 @@ def _cmd_view(args: argparse.Namespace) -> int:
     from synth.replay.run import replay_context
     from synth.replay.trace import record_run
 
-    if args.proof_trials < 0:
-        raise SynthError(f"--proof-trials must be 0 or more, got {args.proof_trials}")
     base_dir = Path(args.task).resolve().parent
     spec = load_task(args.task)
     if args.program is not None:
@@ -152,7 +149,7 @@ def add_view_parser(sub: Any) -> None:
     )
     p.add_argument(
         "--proof-trials",
-        type=int,
+        type=COUNT,
         default=0,
         metavar="N",
         help="Monte Carlo trials of the plan's proof when no program is given (default: 0, "

@@ -8,15 +8,16 @@ import sys
 from typing import Any
 
 from synth.cli.arguments import (
+    COUNT,
     DEFAULT_MIN_SUCCESS,
     DEFAULT_PROOF_TRIALS,
     SEED,
     add_workers_argument,
     picture_format,
+    rate,
     resolve_workers,
 )
 from synth.cli.files import write_output
-from synth.exceptions import SynthError
 from synth.progress import BAR_MIN_TRIALS, ProgressBar
 
 
@@ -32,10 +33,6 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     spec = load_task(args.task)
     if args.svg is not None:
         picture_format(args.svg)
-    if args.proof_trials is not None and args.proof_trials < 0:
-        raise SynthError(f"--proof-trials must be 0 or more, got {args.proof_trials}")
-    if args.min_success is not None and not 0.0 <= args.min_success <= 1.0:
-        raise SynthError(f"--min-success must lie between 0 and 1, got {args.min_success}")
     workers = resolve_workers(args.workers)
     options = SynthesisOptions(
         plan=PlanOptions(try_harder=args.try_harder, exhaustive=args.exhaustive),
@@ -148,7 +145,7 @@ def add_plan_parser(sub: Any) -> None:
     )
     p.add_argument(
         "--proof-trials",
-        type=int,
+        type=COUNT,
         default=None,
         metavar="N",
         help="Monte Carlo trials of the replay proof (default: the task's proof.trials, else "
@@ -156,7 +153,7 @@ def add_plan_parser(sub: Any) -> None:
     )
     p.add_argument(
         "--min-success",
-        type=float,
+        type=rate,
         default=None,
         metavar="RATE",
         help="success rate the proof must reach (default: the task's proof.min_success, else "

@@ -12,10 +12,13 @@ import sys
 from typing import Any, TextIO
 
 from synth.cli.arguments import (
+    COUNT,
     DEFAULT_TRIALS,
+    INDEX,
     SEED,
     add_workers_argument,
     picture_format,
+    rate,
     resolve_workers,
 )
 from synth.cli.files import display_name, read_program, write_output
@@ -56,8 +59,6 @@ def _cmd_replay(args: argparse.Namespace) -> int:
         return 0
     if args.program is None:
         raise SynthError("give the PROGRAM.al to replay (or --preamble to print the binding)")
-    if args.trials < 0:
-        raise SynthError(f"--trials must be 0 or more, got {args.trials}")
     _check_diagnostics(args)
     workers = resolve_workers(args.workers)
     if args.svg is not None:
@@ -156,12 +157,6 @@ def _replay_with(
 
 def _check_diagnostics(args: argparse.Namespace) -> None:
     """Usage errors of ``--failures``, ``--trial`` and ``--min-success``."""
-    if args.failures < 0:
-        raise SynthError(f"--failures must be 0 or more, got {args.failures}")
-    if args.trial is not None and args.trial < 0:
-        raise SynthError(f"--trial must be 0 or more, got {args.trial}")
-    if args.min_success is not None and not 0.0 <= args.min_success <= 1.0:
-        raise SynthError(f"--min-success must be between 0 and 1, got {args.min_success:g}")
     if args.min_success is not None and (args.trial is not None or args.trials == 0):
         # a rate needs trials: with none (or one re-run alone) the bound would never be checked
         alone = "--trial I re-runs one trial" if args.trial is not None else "--trials is 0"
@@ -276,7 +271,7 @@ def add_replay_parser(sub: Any) -> None:
     p.add_argument("--task", required=True, metavar="TASK.yaml", help="task specification")
     p.add_argument(
         "--trials",
-        type=int,
+        type=COUNT,
         default=DEFAULT_TRIALS,
         help=f"Monte Carlo trials in sampled true worlds (default: {DEFAULT_TRIALS}; 0: none)",
     )
@@ -320,14 +315,14 @@ def add_replay_parser(sub: Any) -> None:
     )
     p.add_argument(
         "--failures",
-        type=int,
+        type=COUNT,
         default=0,
         metavar="K",
         help="print the first K failing trials with the errors each sampled",
     )
     p.add_argument(
         "--trial",
-        type=int,
+        type=INDEX,
         default=None,
         metavar="I",
         help="re-run Monte Carlo trial I of --seed alone (its sampled world, outcome, line); "
@@ -335,7 +330,7 @@ def add_replay_parser(sub: Any) -> None:
     )
     p.add_argument(
         "--min-success",
-        type=float,
+        type=rate,
         default=None,
         metavar="P",
         help="exit 1 when the observed Monte Carlo success rate is below P (0–1; the rate "
