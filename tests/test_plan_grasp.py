@@ -89,6 +89,13 @@ def test_hand_openings_follow_l2139() -> None:
     assert grasp == pytest.approx(0.185 * CM, abs=0.001 * CM)
     # The fixture's pin is 0.635 cm (1/4 in) thick: 3.175 and 0.381 cm.
     assert hand_openings(0.635 * CM, OPTS) == pytest.approx((3.175 * CM, 0.381 * CM))
+    # A 2 mm dowel: the seed's threshold would be 2 − 2.54 < 0 mm, which no closing ever
+    # reads; a quarter of its diameter (0.5 mm) stays between "closed on the pin" (2 mm) and
+    # "closed on nothing" (0). The two rules meet at 4/3 · 0.1 in, where d − 0.1 in = d/4.
+    assert hand_openings(0.2 * CM, OPTS)[1] == pytest.approx(0.05 * CM)
+    meet = 0.4 * INCH / 3
+    assert hand_openings(meet, OPTS)[1] == pytest.approx(meet - 0.1 * INCH)
+    assert hand_openings(meet, OPTS)[1] == pytest.approx(meet / 4)
 
 
 def test_approach_points_match_the_phl_spec_printouts() -> None:
