@@ -227,3 +227,51 @@ def test_a_hole_deeper_than_its_box_is_refused_at_its_depth() -> None:
     # A through hole (depth = the box's height) is a hole the meshes drill (test_meshes).
     through = head + bh1 + tail.replace("depth: 1.71 cm", "depth: 4.90 cm", 1)
     assert parse_task(through).frames[2].shape.depth == pytest.approx(0.049)
+
+
+def _seed_with(old: str, new: str) -> tuple[str, int]:
+    """The seed task with its one ``old`` replaced by ``new``, and the line of the change."""
+    text = SEED_TASK.read_text(encoding="utf-8")
+    assert text.count(old) == 1, old
+    return text.replace(old, new), text[: text.index(old)].count("\n") + 1
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "path", "fragment"),
+    [
+        # BH1 is 1.71 cm deep: a pin pushed 2.5 cm in would be below its bottom (the planner
+        # refused it as "hand cannot grasp": d_min exceeded d_max)
+        ("  d_f: 1.71 cm  ", "  d_f: 2.5 cm   ", "insertion.d_f", "2.5 cm is deeper than hole BH1"),
+        # the success test tells seated from missed by d_f − d_s: negative limits otherwise
+        ("  d_s: 0 cm", "  d_s: 1.8 cm", "insertion.d_s", "1.8 cm must be less than d_f = 1.71"),
+        # the pin stands in RH1; BH2 is a hole of the box, 21 cm away
+        ("  start_hole: RH1", "  start_hole: BH2", "insertion.start_hole", "does not stand in BH2"),
+        # pulling PIN1 out of RH1 to put it back planned and proved a no-op
+        ("  hole: BH1\n  start_hole", "  hole: RH1\n  start_hole", "insertion.hole", "already"),
+        # BH1 is drilled into the box; the rack's top was taken for its face (tapping place
+        # and search measured on the rack)
+        (
+            "depth: 1.71 cm, chamfer_width: 0.25 cm, surface: box_top}\n  - name: bh2",
+            "depth: 1.71 cm, chamfer_width: 0.25 cm, surface: rack_top}\n  - name: bh2",
+            "frames[2].shape.surface",
+            "belongs to 'box' but surface 'rack_top' to 'rack'",
+        ),
+        # an outline 0.2 cm wider than the 8.90 cm box put tapping places in the air
+        (
+            "[[-4.45 cm, -3.80 cm], [4.45 cm, -3.80 cm]",
+            "[[-4.65 cm, -3.80 cm], [4.45 cm, -3.80 cm]",
+            "frames[1].shape.outline[0]",
+            "outside the top face of box 'box' (8.9 × 7.6 cm)",
+        ),
+    ],
+)
+def test_an_insertion_or_face_the_parts_contradict_is_refused_at_its_field(
+    old: str, new: str, path: str, fragment: str
+) -> None:
+    text, line = _seed_with(old, new)
+    with pytest.raises(SpecError) as refused:
+        parse_task(text)
+    assert refused.value.path == path
+    assert fragment in refused.value.detail
+    if "\n" not in old:
+        assert refused.value.line == line

@@ -15,12 +15,20 @@ import numpy as np
 from pydantic import ValidationError
 from scipy.optimize import linprog
 
-from synth.exceptions import SpecError
+from synth.exceptions import FrameLookupError, SpecError
 from synth.models.features import check_contacts
 from synth.models.graph import AttributeGraph
 from synth.models.jamming import fit_problem
 from synth.models.meshes import hole_problem
-from synth.models.spec import PARAMS, WORLD, FrameSpec, InsertionSpec, TaskSpec, Uncertainty
+from synth.models.spec import (
+    PARAMS,
+    WORLD,
+    FrameSpec,
+    HoleShape,
+    InsertionSpec,
+    TaskSpec,
+    Uncertainty,
+)
 from synth.models.yamlread import DEFAULT_LIMITS, PathKey, YamlLimits, format_path, read_yaml
 
 
@@ -128,6 +136,7 @@ def check_task(spec: TaskSpec, lines: dict[PathKey, int] | None = None) -> None:
                 surface_shape = spec.frames[target].shape
                 if surface_shape is None or surface_shape.type != "surface":
                     fail(("frames", i, "shape", "surface"), f"{f.shape.surface!r} is not a surface")
+                _check_hole_surface(spec, i, target, fail)
         if f.uncertainty is not None:
             _check_feasible(f.uncertainty, ("frames", i, "uncertainty"), fail)
     if spec.manipulator is not None and spec.manipulator.hand_error is not None:
@@ -145,9 +154,125 @@ def check_task(spec: TaskSpec, lines: dict[PathKey, int] | None = None) -> None:
             elif frame.shape is None or frame.shape.type != want:
                 fail((*where, field), f"{ref!r} is not a {want}")
         _check_fit(ins, by_any, fail, where)
+        _check_depths(ins, by_any, fail, where)
+    for where, ins in _insertion_locations(spec):
+        _check_start_hole(spec, ins, fail, where)
 
     check_contacts(spec, fail)  # contacts section: features exist, pairs and parents make sense
     _check_holes_fit(spec, fail)
+    _check_outlines_fit(spec, fail)
+
+
+def _check_hole_surface(spec: TaskSpec, hole: int, surface: int, fail: Any) -> None:
+    """Fail if a hole names a surface of another part (it is drilled into its own part's face).
+
+    The tapping place and the search are measured on the named face, the replay drills the hole
+    into its own part: a hole on another part's face was planned on the wrong solid.
+    """
+    graph = AttributeGraph(spec)
+    names = spec.frames[hole].name, spec.frames[surface].name
+    owners = graph.owner(names[0]), graph.owner(names[1])
+    if owners[0] != owners[1]:
+        fail(
+            ("frames", hole, "shape", "surface"),
+            f"hole {names[0]!r} belongs to {owners[0]!r} but surface {names[1]!r} to "
+            f"{owners[1]!r}: a hole is drilled into a face of its own part",
+        )
+
+
+def _check_depths(
+    ins: InsertionSpec, frames: dict[str, FrameSpec], fail: Any, where: PathKey
+) -> None:
+    """Fail if ``d_f`` is deeper than the target hole, or ``d_s`` not shallower than ``d_f``.
+
+    A pin cannot be pushed deeper than its hole's bottom (the planner read "hand cannot grasp"
+    into it), and the success test tells a seated pin from a miss by d_f − d_s (a negative
+    limit otherwise).
+    """
+    target = frames.get(ins.hole) or frames.get(ins.hole.upper())
+    shape = None if target is None else target.shape
+    if (
+        ins.d_f is not None
+        and isinstance(shape, HoleShape)
+        and ins.d_f > shape.depth * (1.0 + 1e-9)
+    ):
+        fail(
+            (*where, "d_f"),
+            f"d_f = {100 * ins.d_f:.4g} cm is deeper than hole {ins.hole} "
+            f"({100 * shape.depth:.4g} cm deep)",
+        )
+    if ins.d_f is not None and ins.d_s is not None and ins.d_s >= ins.d_f:
+        fail(
+            (*where, "d_s"),
+            f"d_s = {100 * ins.d_s:.4g} cm must be less than d_f = {100 * ins.d_f:.4g} cm (the "
+            "pin starts into the hole before it is seated)",
+        )
+
+
+def _check_start_hole(spec: TaskSpec, ins: InsertionSpec, fail: Any, where: PathKey) -> None:
+    """Fail if the pin does not stand in its ``start_hole``: on its axis, tip inside it.
+
+    The planner pulls the pin out along the start hole's axis; one the pin is not in was
+    accepted and ignored.
+    """
+    if ins.start_hole is None:
+        return
+    graph = AttributeGraph(spec)
+    try:
+        pin_name, hole_name = graph.resolve(ins.pin), graph.resolve(ins.start_hole)
+    except FrameLookupError:
+        return  # an unknown name is refused where it is checked
+    hole = graph.nodes[hole_name].shape
+    if not isinstance(hole, HoleShape):
+        return
+    if graph.resolve(ins.hole) == hole_name:
+        fail(
+            (*where, "hole"),
+            f"pin {graph.al_names[pin_name]} already stands in {graph.al_names[hole_name]} "
+            "(its start_hole): name the hole it goes into",
+        )
+    tip = graph.relative(hole_name, pin_name)
+    lateral = float(np.hypot(*tip.translation[:2]))
+    depth = -float(tip.translation[2])
+    if lateral > hole.diameter / 2 + 1e-6 or not -1e-6 <= depth <= hole.depth + 1e-6:
+        fail(
+            (*where, "start_hole"),
+            f"pin {graph.al_names[pin_name]} does not stand in {graph.al_names[hole_name]} "
+            f"({100 * lateral:.3g} cm off its axis, tip {100 * depth:.3g} cm deep); start_hole "
+            "names the hole the pin is taken out of",
+        )
+
+
+def _check_outlines_fit(spec: TaskSpec, fail: Any) -> None:
+    """Fail if a surface outline on a box's top face reaches beyond that face.
+
+    The tapping place is chosen inside the outline; an outline wider than the box put it in the
+    air. Surfaces elsewhere (a side face, a free-standing plate) are not checked.
+    """
+    graph = AttributeGraph(spec)
+    for i, f in enumerate(spec.frames):
+        shape = f.shape
+        if shape is None or shape.type != "surface":
+            continue
+        owner = graph.owner(f.name)
+        box = graph.nodes[owner].shape if owner != WORLD else None
+        if box is None or box.type != "box":
+            continue
+        local = graph.relative(owner, f.name)
+        if (
+            local.rotation[2, 2] < 1.0 - _ON_FACE
+            or abs(local.translation[2] - box.size[2]) > _ON_FACE
+        ):
+            continue
+        half = np.array(box.size[:2]) / 2 + _ON_FACE
+        for k, (x, y) in enumerate(shape.outline):
+            corner = local.act(np.array([x, y, 0.0]))[:2]
+            if np.any(np.abs(corner) > half):
+                fail(
+                    ("frames", i, "shape", "outline", k),
+                    f"outline vertex {k + 1} of {f.name!r} lies outside the top face of box "
+                    f"{owner!r} ({100 * box.size[0]:.4g} × {100 * box.size[1]:.4g} cm)",
+                )
 
 
 def _check_holes_fit(spec: TaskSpec, fail: Any) -> None:
