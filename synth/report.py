@@ -441,11 +441,16 @@ def sequence_summary(
             )
         if step.knowledge is not None and k < len(sequence.steps):
             kn = step.knowledge
-            axes = ", ".join(kn.corrected) or "no axis"
-            lines.append(
-                f"  then {kn.part_al} is corrected from the seated {kn.pin_al} along {axes} "
-                f"(reading error ≤ {_num(100 * kn.epsilon)} cm)"
-            )
+            if kn.corrected:
+                lines.append(
+                    f"  then {kn.part_al} is corrected from the seated {kn.pin_al} along "
+                    f"{', '.join(kn.corrected)} (reading error ≤ {_num(100 * kn.epsilon)} cm)"
+                )
+            else:
+                lines.append(
+                    f"  {kn.part_al} is not corrected from the seated {kn.pin_al}: it is known "
+                    f"better than the reading (error ≤ {_num(100 * kn.epsilon)} cm) on every axis"
+                )
     if proof is not None:
         lines += ["", f"Proof: {proof.summary()}"]
     text = "\n".join(lines)

@@ -19,6 +19,7 @@ import pytest
 from _paths import DATA_TASKS, GOLDEN, SEED_TASK, TASKS
 
 from synth.cli import main
+from synth.codegen.sequence import SequenceStep, emit_sequence
 from synth.errors.seat import after_seat, seat_error
 from synth.exceptions import SpecError
 from synth.models.graph import AttributeGraph
@@ -275,3 +276,30 @@ def test_a_sequence_whose_proof_fails_at_its_goal_plans_again() -> None:
     assert failure is not None and failure.line is None
     assert failure.message.startswith("PIN1 is not in BH1") and failure.unmet == "PIN1"
     assert first.candidate.split(": ", 1)[1].split(", ")[0] != made.sequence.steps[0].strategy.name
+
+
+def test_a_seat_that_teaches_nothing_new_emits_no_correction():
+    # Without its ±5° turn the box is known, after the first seat, to within the reading's
+    # error ε on x and y (t' = −ε: no lever ω × h), so the second seat corrects no axis: the
+    # program must not carry a BOX ← BOX*TRANS(NILROTN,VECTOR(0*CM,0*CM,0*CM)) for it.
+    text = TWO.read_text(encoding="utf-8")
+    assert text.count("      rz: 5 deg\n") == 1
+    spec = parse_task(text.replace("      rz: 5 deg\n", ""))
+    first, second = spec.steps
+    learnt = after_seat(spec.step(first), first, 0.0354)
+    assert learnt is not None and learnt.corrected == ("x", "y")
+    bounds = learnt.after.bounds()
+    assert bounds["x"].hi == pytest.approx(learnt.epsilon) == bounds["y"].hi
+    again = after_seat(learnt.spec.step(second), second, 0.0354)
+    assert again is not None and again.corrected == ()
+    graph = AttributeGraph(spec)
+    program = emit_sequence(
+        [
+            SequenceStep("PIN1", "BH1", "", learnt),
+            SequenceStep("PIN2", "BH2", "", again),
+        ],
+        graph,
+        10.0,
+    )
+    assert program.count("BOX ← BOX*TRANS(") == 1  # the first seat's correction only
+    assert "0*CM,0*CM,0*CM" not in program and "ALONG" in program

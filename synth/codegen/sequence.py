@@ -93,7 +93,7 @@ def correction_view(knowledge: SeatKnowledge, graph: AttributeGraph) -> Correcti
         Fragment(f"{_AXES[a]} . {offset}") if a in knowledge.corrected else Fragment("0*CM")
         for a in ("x", "y", "z")
     ]
-    corrected = ", ".join(knowledge.corrected) or "none"
+    corrected = ", ".join(knowledge.corrected)
     return CorrectionView(
         part=L.name(knowledge.part_al, field="sequence.part"),
         pin=L.name(knowledge.pin_al, field="sequence.pin"),
@@ -119,7 +119,11 @@ def emit_sequence(
             L.name(s.pin, field="sequence.steps.pin"),
             L.name(s.hole, field="sequence.steps.hole"),
             Fragment(s.body.rstrip("\n")),
-            None if s.knowledge is None else correction_view(s.knowledge, graph),
+            # a seat that corrects no axis (the part was known better than the reading) would
+            # emit PART ← PART*TRANS(NILROTN,VECTOR(0*CM,0*CM,0*CM)): no statement at all
+            None
+            if s.knowledge is None or not s.knowledge.corrected
+            else correction_view(s.knowledge, graph),
         )
         for k, s in enumerate(steps, start=1)
     )
