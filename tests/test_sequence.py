@@ -33,7 +33,8 @@ from synth.pipeline import (
 from synth.replay.proof import ProofOptions
 from synth.replay.run import machine_for, replay_context, run_machine
 from synth.replay.truth import HandErrors, nominal_world, sample_world
-from synth.strategies.sequence import plan_sequence
+from synth.strategies.records import Rejection
+from synth.strategies.sequence import _plan_step, plan_sequence
 
 TWO = TASKS / "seed_box_two_pins.yaml"
 PLATE = TASKS / "plate_two_pins_shim.yaml"
@@ -303,3 +304,46 @@ def test_a_seat_that_teaches_nothing_new_emits_no_correction():
     )
     assert program.count("BOX ← BOX*TRANS(") == 1  # the first seat's correction only
     assert "0*CM,0*CM,0*CM" not in program and "ALONG" in program
+
+
+REARRANGE = DATA_TASKS / "rearrange_two_pins.yaml"
+
+
+def test_a_step_gives_up_its_best_plan_when_it_leaves_no_next_step():
+    # PIN2 must leave BH1 before PIN1 can go in. PIN2's best plan from the park (γ = 100°) ends
+    # the arm where every pickup of PIN1 sweeps a finger, the palm or the wrist into PIN2 in
+    # BH2 (or leaves the approach blocked): the sequence was refused. Its next-best plan ends
+    # where PIN1's pickup is clear.
+    spec = load_task(REARRANGE)
+    check = _step_check(DATA_TASKS, {})
+    plan = plan_sequence(spec, check, base_dir=DATA_TASKS, compare=False)
+    first, second = plan.steps
+    assert (first.insertion.pin, second.insertion.pin) == ("PIN2", "PIN1")
+    best = _plan_step(first.task, first.insertion, first.index, None, check, None, DATA_TASKS)
+    assert not isinstance(best, Rejection)
+    assert best.strategy.pickup.grasp.gamma == pytest.approx(math.radians(100))
+    assert first.strategy.name != best.strategy.name
+    # From where the best plan ends, PIN1 has no plan at all: what made the search go back.
+    after = after_seat(first.task, first.insertion, best.strategy.pickup.grasp.distance)
+    believed = after.spec if after is not None else first.task
+    refused = _plan_step(
+        believed.step(second.insertion),
+        second.insertion,
+        second.index,
+        best.q_end,
+        check,
+        None,
+        DATA_TASKS,
+    )
+    assert isinstance(refused, Rejection) and refused.kind == "collision"
+
+
+@pytest.mark.slow
+def test_the_rearrangement_is_proven():
+    # Its first plan (before the grasp's hand error was in the relocated grip) aborted 2 of 200
+    # trials with PIN2 seated; the sequence found by giving up a plan is proven.
+    made = synthesize(
+        load_task(REARRANGE), SynthesisOptions(proof=ProofOptions(trials=200)), base_dir=DATA_TASKS
+    )
+    assert isinstance(made, SequenceSynthesis)
+    assert made.proof.passed and made.proof.outcomes == {"success": 200}

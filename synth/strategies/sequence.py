@@ -21,6 +21,11 @@ negative time), so the first complete sequence popped has the least expected tot
 orders, given each step's best-first plan (a step's time is not bounded below usefully without
 planning it: it depends on where the arm comes from and on what the earlier seats taught).
 
+A step's best plan may leave every next step without one (the arm ends where no pickup of the
+next pin is clear, say). A prefix whose every next step is refused is then tried again with its
+last step's strategy given up, up to :data:`STEP_ALTERNATIVES` times: the next-best plan of
+that step, from the same start, joins the frontier as a sibling.
+
 Where a step ends is not the planner's to guess: ``check`` (the pipeline's nominal replay of the
 step's program from its start) accepts a step's strategy and returns the arm's final
 configuration, the next step's start. The planner emits nothing.
@@ -45,7 +50,10 @@ from synth.strategies.options import PlanOptions
 from synth.strategies.planner import plan_task
 from synth.strategies.records import PinInHoleStrategy, PlanResult, Rejection
 
-__all__ = ["SequencePlan", "StepCheck", "StepPlan", "plan_sequence"]
+__all__ = ["STEP_ALTERNATIVES", "SequencePlan", "StepCheck", "StepPlan", "plan_sequence"]
+
+STEP_ALTERNATIVES = 2
+"""Strategies a step gives up, one at a time, when each left every next step without a plan."""
 
 StepCheck = Callable[
     [int, TaskSpec, NDArray[np.float64] | None, PinInHoleStrategy],
@@ -123,6 +131,9 @@ class _Node:
     steps: tuple[StepPlan, ...] = field(compare=False)
     believed: TaskSpec = field(compare=False)
     q: NDArray[np.float64] | None = field(compare=False)
+    parent: _Node | None = field(default=None, compare=False)
+    banned: frozenset[str] = field(default=frozenset(), compare=False)
+    """Strategies its last step gave up (each left every next step without a plan)."""
 
 
 def plan_sequence(
@@ -153,34 +164,36 @@ def plan_sequence(
             return SequencePlan(spec, chosen, order, expanded, planned, reuse, tuple(rejected))
         expanded += 1
         remaining = [i for i in range(len(steps)) if i not in node.done]
+        grown = False
         for i in remaining if order == "free" else remaining[:1]:
-            insertion = steps[i]
-            task = node.believed.step(insertion)
             planned += 1
-            made = _plan_step(task, insertion, i, node.q, check, options, base_dir)
-            if isinstance(made, Rejection):
-                rejected.append(made)
-                continue
-            knowledge = after_seat(task, insertion, made.strategy.pickup.grasp.distance)
-            believed = (
-                knowledge.spec
-                if (reuse and knowledge is not None)
-                else seated(node.believed, insertion)
-            )
-            step = StepPlan(
-                i, insertion, task, made.plan, knowledge if reuse else None, node.q, made.q_end
-            )
-            heapq.heappush(
-                frontier,
-                _Node(
-                    node.cost + step.time,
-                    next(counter),
-                    (*node.done, i),
-                    (*node.steps, step),
-                    believed,
-                    made.q_end,
-                ),
-            )
+            child = _grown(node, i, steps[i], check, options, base_dir, reuse, next(counter))
+            if isinstance(child, Rejection):
+                rejected.append(child)
+            else:
+                heapq.heappush(frontier, child)
+                grown = True
+        parent = node.parent
+        if grown or parent is None or len(node.banned) >= STEP_ALTERNATIVES:
+            continue
+        last = node.steps[-1]
+        planned += 1
+        banned = node.banned | {last.strategy.name}
+        sibling = _grown(
+            parent,
+            last.index,
+            last.insertion,
+            check,
+            options,
+            base_dir,
+            reuse,
+            next(counter),
+            banned,
+        )
+        if isinstance(sibling, Rejection):
+            rejected.append(sibling)
+        else:
+            heapq.heappush(frontier, sibling)
     root = root_cause(rejected)
     raise NoStrategyError(spec.name, tuple(rejected), root)
 
@@ -195,6 +208,41 @@ class _Made:
         return self.plan.strategy
 
 
+def _grown(
+    node: _Node,
+    index: int,
+    insertion: InsertionSpec,
+    check: StepCheck,
+    options: PlanOptions | None,
+    base_dir: Path | str | None,
+    reuse: bool,
+    tie: int,
+    banned: frozenset[str] = frozenset(),
+) -> _Node | Rejection:
+    """``node`` with step ``index`` planned next (its ``banned`` strategies refused)."""
+    task = node.believed.step(insertion)
+    made = _plan_step(task, insertion, index, node.q, check, options, base_dir, banned)
+    if isinstance(made, Rejection):
+        return made
+    knowledge = after_seat(task, insertion, made.strategy.pickup.grasp.distance)
+    believed = (
+        knowledge.spec if (reuse and knowledge is not None) else seated(node.believed, insertion)
+    )
+    step = StepPlan(
+        index, insertion, task, made.plan, knowledge if reuse else None, node.q, made.q_end
+    )
+    return _Node(
+        node.cost + step.time,
+        tie,
+        (*node.done, index),
+        (*node.steps, step),
+        believed,
+        made.q_end,
+        node,
+        banned,
+    )
+
+
 def _plan_step(
     task: TaskSpec,
     insertion: InsertionSpec,
@@ -203,10 +251,15 @@ def _plan_step(
     check: StepCheck,
     options: PlanOptions | None,
     base_dir: Path | str | None,
+    banned: frozenset[str] = frozenset(),
 ) -> _Made | Rejection:
     ends: dict[str, NDArray[np.float64]] = {}
 
     def accept(strategy: PinInHoleStrategy) -> Rejection | None:
+        if strategy.name in banned:
+            # a search limit, like the seed's ω pruning: never the root cause of a refusal
+            reason = "pruned: it left every next step of the sequence without a plan"
+            return Rejection(strategy.name, reason, cause="pruned")
         rejection, q_end = check(index, task, q_start, strategy)
         if rejection is None and q_end is not None:
             ends[strategy.name] = q_end
