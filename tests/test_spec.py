@@ -246,6 +246,27 @@ def _seed_with(old: str, new: str) -> tuple[str, int]:
         ("  d_s: 0 cm", "  d_s: 1.8 cm", "insertion.d_s", "1.8 cm must be less than d_f = 1.71"),
         # the pin stands in RH1; BH2 is a hole of the box, 21 cm away
         ("  start_hole: RH1", "  start_hole: BH2", "insertion.start_hole", "does not stand in BH2"),
+        # RH1 (0.64 cm) leaves the 0.635 cm pin 0.0025 cm of radial play: an axis 0.1 cm off
+        # puts the pin into the rack's wall, though its tip centre is inside the 0.32 cm mouth
+        (
+            "pose: {translation: [0 cm, 0 cm, -1.71 cm]}",
+            "pose: {translation: [0.1 cm, 0 cm, -1.71 cm]}",
+            "insertion.start_hole",
+            "axis 0.1 cm off the hole's, which leaves it 0.0025 cm of play",
+        ),
+        # a tip above the mouth stands on nothing: said as height, not as a negative depth
+        (
+            "pose: {translation: [0 cm, 0 cm, -1.71 cm]}",
+            "pose: {translation: [0 cm, 0 cm, 0.5 cm]}",
+            "insertion.start_hole",
+            "tip 0.5 cm above its mouth",
+        ),
+        (
+            "pose: {translation: [0 cm, 0 cm, -1.71 cm]}",
+            "pose: {translation: [0 cm, 0 cm, -2 cm]}",
+            "insertion.start_hole",
+            "tip 2 cm deep in a hole 1.71 cm deep",
+        ),
         # pulling PIN1 out of RH1 to put it back planned and proved a no-op
         ("  hole: BH1\n  start_hole", "  hole: RH1\n  start_hole", "insertion.hole", "already"),
         # BH1 is drilled into the box; the rack's top was taken for its face (tapping place
@@ -273,5 +294,8 @@ def test_an_insertion_or_face_the_parts_contradict_is_refused_at_its_field(
         parse_task(text)
     assert refused.value.path == path
     assert fragment in refused.value.detail
+    if path == "insertion.start_hole":
+        # the pin's pose and its start_hole disagree: the message points at the start_hole
+        line = text[: text.index("  start_hole:")].count("\n") + 1
     if "\n" not in old:
         assert refused.value.line == line

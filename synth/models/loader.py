@@ -26,6 +26,7 @@ from synth.models.spec import (
     FrameSpec,
     HoleShape,
     InsertionSpec,
+    PinShape,
     TaskSpec,
     Uncertainty,
 )
@@ -234,12 +235,24 @@ def _check_start_hole(spec: TaskSpec, ins: InsertionSpec, fail: Any, where: Path
     tip = graph.relative(hole_name, pin_name)
     lateral = float(np.hypot(*tip.translation[:2]))
     depth = -float(tip.translation[2])
-    if lateral > hole.diameter / 2 + 1e-6 or not -1e-6 <= depth <= hole.depth + 1e-6:
+    pin = graph.nodes[pin_name].shape
+    # the pin's axis can stray from the hole's by the radial clearance, no more
+    play = (hole.diameter - pin.diameter) / 2 if isinstance(pin, PinShape) else hole.diameter / 2
+    wrong = []
+    if lateral > max(play, 0.0) + 1e-6:
+        wrong.append(
+            f"axis {100 * lateral:.3g} cm off the hole's, which leaves it "
+            f"{100 * max(play, 0.0):.3g} cm of play"
+        )
+    if depth < -1e-6:
+        wrong.append(f"tip {100 * -depth:.3g} cm above its mouth")
+    elif depth > hole.depth + 1e-6:
+        wrong.append(f"tip {100 * depth:.3g} cm deep in a hole {100 * hole.depth:.3g} cm deep")
+    if wrong:
         fail(
             (*where, "start_hole"),
             f"pin {graph.al_names[pin_name]} does not stand in {graph.al_names[hole_name]} "
-            f"({100 * lateral:.3g} cm off its axis, tip {100 * depth:.3g} cm deep); start_hole "
-            "names the hole the pin is taken out of",
+            f"({'; '.join(wrong)}); start_hole names the hole the pin is taken out of",
         )
 
 

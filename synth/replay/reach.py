@@ -55,6 +55,12 @@ def solve_near(arm: Arm, pose: pin.SE3, near: NDArray[np.float64]) -> NDArray[np
     raise _problem(arm, pose)
 
 
+def _degrees(angle_rad: float) -> str:
+    """An excess in degrees, to 0.1° or, below it, to two figures (never a bare 0.0°)."""
+    degrees = float(np.degrees(angle_rad))
+    return f"{degrees:.1f}°" if degrees >= 0.095 else f"{degrees:.2g}°"
+
+
 def _problem(arm: Arm, pose: pin.SE3) -> ReachProblem:
     where = describe_pose(pose)
     inverse = arm.closed_form
@@ -86,7 +92,7 @@ def _problem(arm: Arm, pose: pin.SE3) -> ReachProblem:
     best = min(within, key=lambda q: float(np.sum(excess(q))))
     over = excess(best)
     joints = ", ".join(
-        f"{limits.names[i]} {np.degrees(over[i]):.1f}° past its limit"
+        f"{limits.names[i]} {_degrees(over[i])} past its limit"
         for i in np.flatnonzero(over > _TOLERANCE)
     )
     return ReachProblem(
