@@ -169,12 +169,28 @@ def test_taylor_product_remainder_is_rigorous() -> None:
 
 
 def test_huge_rotations_are_refused() -> None:
-    text = COUPLED.replace("rz: 5 deg", "rz: 170 deg").split("      constraints:")[0]
-    text += "  - {name: hole, al_name: BH1, parent: box, pose: {translation: [3 cm, 3 cm, 4 cm]}}\n"
-    from synth.exceptions import EstimationError
+    from synth.exceptions import EstimationError, SpecError
 
-    graph = AttributeGraph(parse_task(text))
-    with pytest.raises(EstimationError, match="too large"):
+    def task(rz: str, hole_rx: str = "0 deg") -> str:
+        text = COUPLED.replace("rz: 5 deg", f"rz: {rz}").split("      constraints:")[0]
+        return text + (
+            "  - {name: hole, al_name: BH1, parent: box, pose: {translation: [3 cm, 3 cm, 4 cm]},"
+            f" uncertainty: {{rx: {hole_rx}}}}}\n"
+        )
+
+    # one rotation by θ has tr(ΔR − I) = 2(cos θ − 1): at 90° the certificate's trace test
+    # (tr > −2) fails whatever else the chain holds, so the spec is refused at the field
+    with pytest.raises(SpecError, match="reaches 90°") as refused:
+        parse_task(task("90 deg"))
+    assert refused.value.path.endswith("uncertainty.rz")
+    # alone, 89.5° is still certified (the cap is where the trace test fails, not a margin
+    # below it), by a bound that covers the true 89.5°
+    chain = chain_between(AttributeGraph(parse_task(task("89.5 deg"))), "world", "hole")
+    assert estimate_errors(chain).certified.dtheta_z.hi >= math.radians(89.5)
+    # two rotations of 70° and 50° add 2(1 − cos 70°) + 2(1 − cos 50°) = 2.03 > 2 to the trace
+    # bound: refused, naming both tolerances, the larger first
+    graph = AttributeGraph(parse_task(task("70 deg", "50 deg")))
+    with pytest.raises(EstimationError, match=r"too large .*rz ±70°, .*rx ±50°"):
         estimate_errors(chain_between(graph, "world", "hole"))
     assert math.isfinite(rotation_remainder(2, math.pi).max())
 

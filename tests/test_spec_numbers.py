@@ -131,18 +131,20 @@ def test_a_nan_arm_base_names_the_field(value: object) -> None:
     assert refused(data).path == "manipulator.arm.base.translation[0]"
 
 
-def test_rotation_errors_are_at_most_half_a_turn() -> None:
-    # ±180° already admits every orientation; the first-order model (synth.errors.taylor)
-    # has none above it, and used to raise a bare ValueError (exit 70).
+def test_rotation_errors_are_below_a_quarter_turn() -> None:
+    # One rotation by θ has tr(ΔR − I) = 2(cos θ − 1); the certified bound of
+    # synth.errors.estimate needs it above −2, so from 90° on no chain through the tolerance can
+    # be certified (a 180° hand error had been accepted and refused by the planner with no field
+    # named). ±180° had also used to raise a bare ValueError (exit 70).
     data = seed()
     i, box = frame(data, "box")
-    box["uncertainty"]["rz"] = "180 deg"
-    assert validate_task(data).frames[i].uncertainty.rz.hi == pytest.approx(math.pi)  # type: ignore[union-attr]
-    for bad in ("180.01 deg", "200 deg", ["-200 deg", "10 deg"], "4 rad"):
+    box["uncertainty"]["rz"] = "89.9 deg"
+    assert validate_task(data).frames[i].uncertainty.rz.hi == pytest.approx(math.radians(89.9))  # type: ignore[union-attr]
+    for bad in ("90 deg", "180 deg", "200 deg", ["-200 deg", "10 deg"], "4 rad"):
         box["uncertainty"]["rz"] = bad
         error = refused(data)
         assert error.path == f"frames[{i}].uncertainty.rz"
-        assert "180" in error.detail or "360" in error.detail
+        assert "reaches 90°" in error.detail or "360" in error.detail
 
 
 def test_a_chamfer_deeper_than_its_hole_names_the_shape() -> None:
@@ -191,6 +193,19 @@ def test_dr_ok_must_be_positive(value: str) -> None:
     data["insertion"]["dr_ok"] = value
     error = refused(data)
     assert error.path == "insertion.dr_ok" and "> 0" in error.detail
+
+
+@pytest.mark.parametrize(("value", "ok"), [(0.0, True), (2.0, True), (2.01, False), (50, False)])
+def test_friction_lies_in_the_range_of_engineering_materials(value: float, ok: bool) -> None:
+    # μ = 0 is the frictionless limit (no wedging, Whitney); 2 is rubber on steel, the highest
+    # engineering pair (Marks' Table 3.2.1); 50 is 0.50 written as a percentage
+    data = seed()
+    data["insertion"]["friction"] = value
+    if ok:
+        validate_task(data)
+    else:
+        error = refused(data)
+        assert error.path == "insertion.friction" and f"μ = {value:g} is above 2" in error.detail
 
 
 def test_constraint_coefficients_are_quantities_not_expressions() -> None:

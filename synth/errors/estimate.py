@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from synth.errors.bounds import Interval, bound_linear
-from synth.errors.chain import ErrorChain
+from synth.errors.chain import ErrorChain, Perturbation
 from synth.errors.parameters import ParameterSpace
 from synth.errors.taylor import PoseModel, TaylorModel, vee
 from synth.exceptions import EstimationError
@@ -171,6 +171,20 @@ def vee_remainder(b: np.ndarray) -> np.ndarray:
     return 0.5 * np.array([b[2, 1] + b[1, 2], b[0, 2] + b[2, 0], b[1, 0] + b[0, 1]])
 
 
+def _rotation_tolerances(chain: ErrorChain) -> str:
+    """``owner rz ±80°, …``: the rotation tolerances along a chain, largest first."""
+    used = {t.block for t in chain.terms if isinstance(t, Perturbation)}
+    found = []
+    for index in sorted(used):
+        block = chain.space.blocks[index]
+        for k, name in enumerate(block.names):
+            if name in ("rx", "ry", "rz"):
+                width = max(-float(block.lo[k]), float(block.hi[k]))
+                found.append((width, f"{block.owner} {name} ±{math.degrees(width):.3g}°"))
+    found.sort(key=lambda item: -item[0])
+    return ", ".join(text for _, text in found) or "no rotation tolerance"
+
+
 def estimate_errors(chain: ErrorChain, start: str = "from", end: str = "to") -> ErrorReport:
     """First-order and certified error bounds of a relation chain (module docstring)."""
     rel = RelationModel.of(chain)
@@ -180,7 +194,8 @@ def estimate_errors(chain: ErrorChain, start: str = "from", end: str = "to") -> 
     axis_slack = float(np.abs(rel.nominal_axis) @ rel.axis.remainder)
     if trace_slack >= 2.0 or axis_slack >= 1.0:
         raise EstimationError(
-            f"rotation errors of {start}→{end} are too large for a certified small-angle bound"
+            f"rotation errors of {start}→{end} are too large for a certified small-angle bound "
+            f"({_rotation_tolerances(chain)}); together they must stay well below 90°"
         )
     first_p, cert_p, first_t, cert_s = [], [], [], []
     for d in np.eye(3):

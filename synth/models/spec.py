@@ -107,6 +107,19 @@ class Bound(_Model):
     hi: float
 
 
+def _check_rotation_error(given: Any, largest_rad: float) -> None:
+    """Refuse a rotation error of 90° or more: no error chain through it can be certified.
+
+    The certified bound needs tr(ΔR − I) > −2 (:func:`synth.errors.estimate.estimate_errors`);
+    one rotation by θ alone has tr(ΔR − I) = 2(cos θ − 1), which reaches −2 at θ = 90°.
+    """
+    if largest_rad >= math.pi / 2:
+        raise ValueError(
+            f"rotation error {given!r} reaches 90°: the error model certifies rotations below "
+            "90° (a part known only that loosely has to be located before it is planned for)"
+        )
+
+
 def _bound(kind: Literal["length", "angle"]) -> Any:
     def parse(v: Any) -> Any:
         if isinstance(v, Bound | dict):
@@ -119,21 +132,15 @@ def _bound(kind: Literal["length", "angle"]) -> Any:
                 raise ValueError(f"min {v[0]!r} exceeds max {v[1]!r}")
             if lo > 0 or hi < 0:
                 raise ValueError("the nominal value (0) must lie inside [min, max]")
-            if kind == "angle" and max(-lo, hi) > math.pi:
-                raise ValueError(
-                    f"rotation error {v!r} exceeds 180°: ±180° already allows every orientation, "
-                    "and the first-order error model needs a bounded rotation"
-                )
+            if kind == "angle":
+                _check_rotation_error(v, max(-lo, hi))
             return {"lo": lo, "hi": hi}
         tol = parse_quantity(v, kind)
         if tol < 0:
             raise ValueError(f"tolerance {v!r} is negative; write the half-width, e.g. '0.3 in'")
         lo, hi = -tol, tol
-        if kind == "angle" and max(-lo, hi) > math.pi:
-            raise ValueError(
-                f"rotation error {v!r} exceeds 180°: ±180° already allows every orientation, "
-                "and the first-order error model needs a bounded rotation"
-            )
+        if kind == "angle":
+            _check_rotation_error(v, tol)
         return {"lo": lo, "hi": hi}
 
     return BeforeValidator(parse)
@@ -305,6 +312,8 @@ class PinShape(_Model):
     mass: (
         Annotated[float, BeforeValidator(lambda v: parse_quantity(v, "mass")), Field(ge=0)] | None
     ) = None
+    """[kg] kept with the task; the planner's models are kinematic and quasi-static (seed §3),
+    so no figure depends on it."""
 
     @model_validator(mode="after")
     def _consistent(self) -> PinShape:
@@ -415,6 +424,10 @@ dry static, 0.1–0.2 greasy; 0.3 is a cautious value for oiled parts). Dry part
 theirs (``insertion.friction``)."""
 
 
+MAX_FRICTION = 2.0
+"""[1] the largest pin–hole friction coefficient a task may give (rubber on steel, about 2)."""
+
+
 class InsertionSpec(_Model):
     """Which pin goes into which hole, and the insertion parameters of seed §4.2 (L1990–2010).
 
@@ -435,6 +448,19 @@ class InsertionSpec(_Model):
     friction: Annotated[float, Field(ge=0, allow_inf_nan=False)] = DEFAULT_FRICTION
     """[1] pin–hole friction coefficient μ: the planner's wedging limit
     (:mod:`synth.models.jamming`) and the replay's (:mod:`synth.replay.wedging`)."""
+
+    @field_validator("friction")
+    @classmethod
+    def _friction_physical(cls, v: float) -> float:
+        # the highest coefficients of engineering pairs, clean dry metals and rubber on steel,
+        # lie near 1–2 (Marks' Table 3.2.1); a larger μ is a slip of the pen (50 for 0.50)
+        if v > MAX_FRICTION:
+            raise ValueError(
+                f"friction μ = {v:g} is above {MAX_FRICTION:g}: no engineering pair of "
+                "materials grips that hard (dry steel 0.6–0.8, rubber on steel up to about 2); "
+                "give the coefficient, not a percentage"
+            )
+        return v
 
     @field_validator("dr_ok")
     @classmethod
