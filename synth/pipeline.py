@@ -38,6 +38,7 @@ from numpy.typing import NDArray
 
 from synth.codegen.emitter import emit_program
 from synth.codegen.sequence import SequenceStep, emit_sequence
+from synth.codegen.views import missed_message
 from synth.exceptions import NoStrategyError
 from synth.models.believed import believed_graph
 from synth.models.graph import AttributeGraph
@@ -243,7 +244,13 @@ def synthesize(
             if proof.passed:
                 programs[strategy.name] = body
                 return None
-            return Rejection(strategy.name, proof.reason(), cause="proof", stage="proof")
+            return Rejection(
+                strategy.name,
+                proof.reason(),
+                cause="proof",
+                stage="proof",
+                refuted=_refuted(proof, strategy),
+            )
 
         plan = plan_task(spec, options=opts.plan, base_dir=where, accept=accept)
     chosen = plan.strategy
@@ -268,10 +275,11 @@ MAX_SEQUENCE_ATTEMPTS = 4
 strategy and the sequence is planned again."""
 
 
-def _step_check(base_dir: Path | None, banned: dict[int, set[str]]) -> StepCheck:
+def _step_check(base_dir: Path | None, banned: dict[int, dict[str, str | None]]) -> StepCheck:
     """Accept a step's strategy by the nominal replay of its program; return where it ends.
 
-    Strategies in ``banned[step]`` failed a proof of the whole sequence and are refused.
+    Strategies in ``banned[step]`` failed a proof of the whole sequence and are refused, with
+    the belief that proof refuted (:func:`_refuted`).
     """
 
     def check(
@@ -280,9 +288,13 @@ def _step_check(base_dir: Path | None, banned: dict[int, set[str]]) -> StepCheck
         q_start: NDArray[np.float64] | None,
         strategy: PinInHoleStrategy,
     ) -> tuple[Rejection | None, NDArray[np.float64] | None]:
-        if strategy.name in banned.get(index, set()):
+        refused = banned.get(index, {})
+        if strategy.name in refused:
             reason = "the sequence holding it failed its replay proof in this step"
-            return Rejection(strategy.name, reason, cause="proof", stage="proof"), None
+            rejection = Rejection(
+                strategy.name, reason, cause="proof", stage="proof", refuted=refused[strategy.name]
+            )
+            return rejection, None
         graph = believed_graph(task)
         body = emit_program(strategy, graph)
         context = replay_context(body, task, base_dir=base_dir)
@@ -297,6 +309,14 @@ def _step_check(base_dir: Path | None, banned: dict[int, set[str]]) -> StepCheck
         return None, machine.configuration
 
     return check
+
+
+def _refuted(proof: Proof, strategy: PinInHoleStrategy) -> str | None:
+    """``dr_ok`` when the failed run aborted because the pin missed the hole, else None."""
+    failed = proof.nominal if proof.nominal.outcome != "success" else proof.first_failure
+    if failed is None or failed.outcome != "abort":
+        return None
+    return "dr_ok" if failed.message.startswith(missed_message(strategy)) else None
 
 
 def _failing_line(proof: Proof) -> int | None:
@@ -330,14 +350,15 @@ def _synthesize_sequence(
 ) -> SequenceSynthesis:
     proof_options = opts.proof or ProofOptions.for_task(spec)
     graph = believed_graph(spec)
-    banned: dict[int, set[str]] = {}
+    banned: dict[int, dict[str, str | None]] = {}
     attempts: list[CandidateProof] = []
+    plan_options = opts.plan
     with TrialPool(proof_options.workers) as pool:
         for attempt in range(1, MAX_SEQUENCE_ATTEMPTS + 1):
             sequence = plan_sequence(
                 spec,
                 _step_check(where, banned),
-                options=opts.plan,
+                options=plan_options,
                 base_dir=where,
                 reuse=opts.reuse,
             )
@@ -373,7 +394,10 @@ def _synthesize_sequence(
             if failed is None:
                 break
             step = sequence.steps[failed]
-            banned.setdefault(step.index, set()).add(step.strategy.name)
+            refuted = _refuted(proof, step.strategy)
+            banned.setdefault(step.index, {})[step.strategy.name] = refuted
+            if refuted == "dr_ok":  # a miss: every step's search at its parts' lead from now on
+                plan_options = dataclasses.replace(plan_options, at_lead=True)
     rejections = tuple(
         Rejection(a.candidate, a.proof.reason(), cause="proof", stage="proof") for a in attempts
     )

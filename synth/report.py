@@ -362,11 +362,12 @@ def plan_summary(
         ]
     if records:
         lines += ["", "Record (the seed's PHL SPEC layout, L2600–2710):", *strategy_spec(s)]
+    width = max([36, *(len(c.name) + 2 for c in result.candidates)])
     lines += [
         "",
         f"Candidates ({len(result.candidates)}; {result.mode} refined {result.refined}, "
         f"minimum refinement cost {result.minimum_refinement_cost:.2f} s):",
-        f"  {'candidate':36}{'gross':>10}{'fine':>8}{'total':>8}  refinement",
+        f"  {'candidate':{width}}{'gross':>10}{'fine':>8}{'total':>8}  refinement",
     ]
     for c in result.candidates:
         if c.refined:
@@ -377,7 +378,7 @@ def plan_summary(
         else:
             what, fine, total = "not refined (cutoff)", f"{'—':>8}", f"{'≥':>4}{c.gross_time:4.2f}"
         mark = "*" if c is s else " "
-        lines.append(f"{mark} {c.name:36}{c.gross_time:10.2f}{fine}{total}  {what or 'none'}")
+        lines.append(f"{mark} {c.name:{width}}{c.gross_time:10.2f}{fine}{total}  {what or 'none'}")
     lines.append("  (gross = pickup + transport; total = gross + fine: the expected time)")
     lines += ["", f"Rejected ({len(result.rejected)}):"]
     lines += [

@@ -23,6 +23,7 @@ from synth.cli import DEFAULT_PROOF_TRIALS as CLI_PROOF_TRIALS
 from synth.cli import main
 from synth.exceptions import NoStrategyError
 from synth.models.loader import load_task, parse_task
+from synth.models.spec import TaskSpec
 from synth.replay.proof import (
     DEFAULT_MIN_SUCCESS,
     DEFAULT_PROOF_TRIALS,
@@ -37,6 +38,7 @@ from synth.replay.run import replay_context, run_trial, trial_seed
 from synth.replay.trials import TrialPool
 from synth.replay.truth import sample_world
 from synth.strategies import PlanOptions, plan_task
+from synth.strategies.planner import AT_THE_LEAD
 from synth.strategies.records import Rejection
 
 
@@ -231,3 +233,34 @@ def test_a_pin_from_an_uncertain_rack_is_relocated_after_center_and_proven() -> 
     assert "PIN1 ← BMANIP*TRANS(" in proven.program
     assert proven.proof.passed and proven.proof.outcomes == {"success": 20}
     assert "PIN1 ← BMANIP" not in SEED_PROGRAM.read_text()
+
+
+def _seed_overstating_dr_ok() -> TaskSpec:
+    """The seed task with Δr_ok = 1.2 cm: wider than all its parts' geometry captures."""
+    text = SEED_TASK.read_text(encoding="utf-8")
+    assert text.count("dr_ok: 0.762 cm") == 1
+    return parse_task(text.replace("dr_ok: 0.762 cm", "dr_ok: 1.2 cm"))
+
+
+def test_a_proof_that_misses_replans_the_search_at_the_parts_lead() -> None:
+    # Searched at 0.75 · 1.2 = 0.9 cm, the spiral leaves parts of the footprint farther than the
+    # lead (chamfer .25 + hole radius .32 − tip radius .13 = .44 cm) from every point it tries,
+    # and there the tip lands on the box's face: a trial misses. The planner then takes the lead
+    # for Δr_ok and searches at 0.75 · 0.44 = 0.33 cm.
+    synthesis = synthesized(_seed_overstating_dr_ok(), trials=100)
+    first, *_, last = synthesis.attempts
+    assert not first.proof.passed and "PIN1 MISSED BH1" in first.proof.reason()
+    assert last.candidate == synthesis.strategy.name == f"{first.candidate} {AT_THE_LEAD}"
+    assert last.proof.passed and last.proof.outcomes == {"success": last.proof.trials}
+    search = synthesis.strategy.search
+    assert search is not None and search.step == pytest.approx(0.75 * 0.0044)
+    assert any("refuting the task's Δr_ok = 1.2 cm" in d for d in synthesis.strategy.decisions)
+
+
+@pytest.mark.slow
+def test_the_search_at_the_lead_is_proven() -> None:
+    # 1 000 trials through the exact chain: none misses (the first plan missed 2 of 49)
+    synthesis = synthesized(_seed_overstating_dr_ok(), trials=100)
+    context = replay_context(synthesis.program, synthesis.task)
+    outcomes = [run_trial(context, 0, i).outcome for i in range(1000)]
+    assert outcomes.count("success") == 1000

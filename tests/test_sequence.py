@@ -347,3 +347,26 @@ def test_the_rearrangement_is_proven():
     )
     assert isinstance(made, SequenceSynthesis)
     assert made.proof.passed and made.proof.outcomes == {"success": 200}
+
+
+@pytest.mark.slow
+def test_a_sequence_that_misses_plans_every_step_at_the_lead():
+    # Both holes are searched at 0.75 · Δr_ok; at dr_ok: 1.2 cm, wider than the parts' lead
+    # (.25 + .32 − .13 = .44 cm), the spiral leaves gaps the replay does not capture and a
+    # trial of the first sequence missed. From then on every step searches at the lead.
+    text = TWO.read_text(encoding="utf-8")
+    assert text.count("dr_ok: 0.762 cm") == 2
+    made = synthesize(
+        parse_task(text.replace("dr_ok: 0.762 cm", "dr_ok: 1.2 cm")),
+        SynthesisOptions(proof=ProofOptions(trials=100, workers=2)),
+        base_dir=TASKS,
+    )
+    assert isinstance(made, SequenceSynthesis)
+    first = made.attempts[0].proof
+    assert not first.passed and first.first_failure is not None
+    assert " MISSED " in first.first_failure.message
+    assert made.proof.passed and made.proof.outcomes == {"success": 100}
+    for step in made.sequence.steps:
+        assert step.strategy.name.endswith(" at the lead")
+        assert step.strategy.search is not None
+        assert step.strategy.search.step == pytest.approx(0.75 * 0.0044)

@@ -14,7 +14,7 @@ from _paths import SEED_TASK, TASKS
 from synth.cli import main
 from synth.exceptions import SpecError, UnitError
 from synth.models.graph import AttributeGraph
-from synth.models.insertion import derive
+from synth.models.insertion import at_lead, derive, exceeds_lead
 from synth.models.loader import load_task, parse_task
 from synth.units import parse_quantity
 
@@ -90,6 +90,24 @@ def test_insertion_parameters_given_and_derived() -> None:
     # the lead tilt atan(.44 / (.34 + .25)) = 36.7° is far above the wedging limit 1.492°
     assert math.atan2(0.44, 0.34 + 0.25) > derived.dtheta_ok == pytest.approx(0.0078125 / 0.3)
     assert derived.source["dr_ok"] == "derived" and given.source["dr_ok"] == "given"
+
+
+def test_the_parameters_at_the_lead_take_its_width_and_tilt() -> None:
+    spec = load_task(SEED_TASK)
+    graph = AttributeGraph(spec)
+    assert spec.insertion is not None
+    # μ = 0: no wedging limit, so the given 10° stands until the lead's own tilt bounds it
+    free = derive(graph, spec.insertion.model_copy(update={"friction": 0.0, "dtheta_ok": 1.0}))
+    assert free.dr_ok == pytest.approx(0.00762) and exceeds_lead(free)
+    lead = at_lead(free, "note: test")
+    # width: chamfer .25 + (hole radius .32 − tip radius .13) = .44 cm; tilt: the tip still
+    # lands on the chamfer up to atan(.44 / (taper .34 + chamfer .25)) = 36.7°
+    assert lead.dr_ok == pytest.approx(0.0044) and not exceeds_lead(lead)
+    assert lead.dtheta_ok == pytest.approx(math.atan2(0.44, 0.59))
+    assert lead.source["dr_ok"] == "the geometric lead" and lead.notes[-1] == "note: test"
+    # with the seed's μ = 0.3 the wedging limit 1.492° stays the tighter bound
+    seed = at_lead(derive(graph, spec.insertion), "note: test")
+    assert seed.dtheta_ok == pytest.approx(0.0078125 / 0.3)
 
 
 BAD = [

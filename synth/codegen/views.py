@@ -53,6 +53,7 @@ __all__ = [
     "ProgramView",
     "SearchView",
     "TapView",
+    "missed_message",
     "program_view",
 ]
 
@@ -355,6 +356,15 @@ def _guard(s: PinInHoleStrategy, pin_: Fragment) -> Guard:
     )
 
 
+def missed_message(s: PinInHoleStrategy) -> str:
+    """The ABORT text of a run whose pin missed its hole: ``PIN1 MISSED BH1``.
+
+    The search's abort, and with ``UNEXPECTEDLY.`` after it the single check's; the pipeline
+    tells a miss from other failures by it.
+    """
+    return f"{L.name(s.pin, field='pin').text} MISSED {L.name(s.hole, field='hole').text}"
+
+
 def program_view(strategy: PinInHoleStrategy, graph: AttributeGraph) -> ProgramView:
     """All pieces of the program for ``strategy`` in ``graph``'s task (see the module doc).
 
@@ -407,7 +417,7 @@ def program_view(strategy: PinInHoleStrategy, graph: AttributeGraph) -> ProgramV
         correction=correction,
     )
 
-    missed = f"{pin_.text} MISSED {hole.text}"
+    missed = missed_message(s)
     search = None
     check = None
     if s.search is not None:

@@ -26,6 +26,7 @@ radius, no taper) for an ``antiparallel`` one. The planner refuses antiparallel 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Literal
@@ -44,7 +45,8 @@ class InsertionParameters:
     gives: for an upright pin it is what the replay captures, which the replay decides from the
     parts themselves (:mod:`synth.replay.capture`), never from these formulas. ``friction``
     [1] is μ and ``wedge_tilt`` [rad] Whitney's θ_wedge = c/μ, the bound on ``dtheta_ok``;
-    ``notes`` are remarks for the plan (a given value clipped).
+    ``notes`` are remarks for the plan (a given value clipped). ``lead_height`` [m] is the
+    entering end's taper plus the chamfer's width, over which the lead is taken up.
     """
 
     pin: str
@@ -60,6 +62,7 @@ class InsertionParameters:
     friction: float
     wedge_tilt: float
     notes: tuple[str, ...] = ()
+    lead_height: float = 0.0
 
 
 def derive(graph: AttributeGraph, spec: InsertionSpec) -> InsertionParameters:
@@ -115,7 +118,37 @@ def derive(graph: AttributeGraph, spec: InsertionSpec) -> InsertionParameters:
         friction=friction,
         wedge_tilt=wedge,
         notes=tuple(notes),
+        lead_height=lead_height,
         **values,
+    )
+
+
+def exceeds_lead(params: InsertionParameters) -> bool:
+    """Whether the Δr_ok planned with is wider than the parts' geometric lead."""
+    return params.dr_ok > params.lead + 1e-9
+
+
+def at_lead(params: InsertionParameters, why: str) -> InsertionParameters:
+    """The parameters with Δr_ok the parts' geometric lead, and Δθ_ok the lead's tilt at most.
+
+    Δr_ok and Δθ_ok given by the task (measured, seed L1963) include the accommodation of the
+    seed's real arm; the replay captures from the parts' geometry alone (Whitney's lead
+    condition, :mod:`synth.replay.capture`): lateral error up to ``lead``, tilt up to
+    ``atan(lead / lead_height)``. ``why`` is the note the plan carries.
+    """
+    lead_tilt = (
+        math.atan2(params.lead, params.lead_height) if params.lead_height > 0 else math.pi / 2
+    )
+    dtheta_ok = min(params.dtheta_ok, lead_tilt)
+    source = dict(params.source, dr_ok="the geometric lead")
+    if dtheta_ok < params.dtheta_ok:
+        source["dtheta_ok"] = "the geometric lead's tilt"
+    return dataclasses.replace(
+        params,
+        dr_ok=params.lead,
+        dtheta_ok=dtheta_ok,
+        source=source,
+        notes=(*params.notes, why),
     )
 
 

@@ -82,3 +82,6 @@ class PlanOptions:
     """Keep every grasp orientation ω with an arm solution, not the best three (L2122)."""
     exhaustive: bool = False
     """Refine every candidate instead of stopping at the best-first cutoff (L2463)."""
+    at_lead: bool = False
+    """Plan with Δr_ok and Δθ_ok at the parts' geometric lead when the task's Δr_ok is wider
+    (:func:`synth.models.insertion.at_lead`): set for a sequence once a proof trial missed."""

@@ -21,10 +21,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from synth.exceptions import NoStrategyError
+from synth.models.insertion import at_lead, exceeds_lead
 from synth.models.spec import TaskSpec
 from synth.strategies.approach import Candidate, plan_approach
 from synth.strategies.causes import root_cause
-from synth.strategies.context import plan_context
+from synth.strategies.context import PlanContext, plan_context
 from synth.strategies.grasp import generate_pickups
 from synth.strategies.options import PlanOptions
 from synth.strategies.records import PinInHoleStrategy, PlanResult, Rejection
@@ -43,6 +44,31 @@ Accept = Callable[[PinInHoleStrategy], Rejection | None]
 
 def _at_stage(rejection: Rejection, stage: str) -> Rejection:
     return rejection if rejection.stage else dataclasses.replace(rejection, stage=stage)
+
+
+AT_THE_LEAD = "at the lead"
+"""Suffix of a candidate's name once it is refined at the parts' lead (:func:`_at_the_lead`)."""
+
+
+def _renamed(made: Refined | Rejection, name: str) -> Refined | Rejection:
+    if isinstance(made, Rejection):
+        return dataclasses.replace(made, candidate=name)
+    return dataclasses.replace(made, strategy=dataclasses.replace(made.strategy, name=name))
+
+
+def _at_the_lead(ctx: PlanContext, missed: str) -> PlanContext:
+    """``ctx`` with Δr_ok and Δθ_ok at the parts' lead (:func:`~synth.models.insertion.at_lead`).
+
+    ``missed`` names the proof a trial of which missed the hole.
+    """
+    ins = ctx.insertion
+    why = (
+        f"note: a trial of {missed} missed the hole, refuting the task's Δr_ok = "
+        f"{100 * ins.dr_ok:.3g} cm (measured, seed L1963), wider than the parts' geometric lead "
+        f"{100 * ins.lead:.3g} cm (chamfer + hole radius − tip radius, all the replay "
+        "captures); re-planned at the lead"
+    )
+    return dataclasses.replace(ctx, insertion=at_lead(ins, why))
 
 
 def plan_task(
@@ -80,13 +106,19 @@ def plan_task(
             rejected.append(_at_stage(made, "approach"))
         else:
             candidates.append(made)
-    lower_bound = minimum_refinement_cost(ctx, candidates)
     refinements: dict[int, Refined | Rejection] = {}
+    refining = [ctx]  # the context refinements use: replaced once, by the lead's
+    if ctx.options.at_lead and exceeds_lead(ctx.insertion):
+        refining[0] = _at_the_lead(ctx, "a replay proof of the sequence")
+    lower_bound = minimum_refinement_cost(refining[0], candidates)
 
     def refine_once(candidate: Candidate) -> Refined | Rejection:
         key = id(candidate)
         if key not in refinements:
-            refinements[key] = refine(ctx, candidate)
+            made = refine(refining[0], candidate)
+            if refining[0] is not ctx:  # named apart from its refuted first refinement
+                made = _renamed(made, f"{candidate.name} {AT_THE_LEAD}")
+            refinements[key] = made
         return refinements[key]
 
     exhaustive = ctx.options.exhaustive
@@ -112,6 +144,17 @@ def plan_task(
             break
         refused.append(_at_stage(verdict, "proof"))
         remaining = [c for c in remaining if c is not best.candidate]
+        if verdict.refuted == "dr_ok" and refining[0] is ctx and exceeds_lead(ctx.insertion):
+            # A trial missed: the proof refuted the task's Δr_ok (measured on the seed's real
+            # arm, L1963; the replay captures within the parts' lead). Every candidate is refined
+            # once more with its search spaced, and its tilt bounded, by the lead.
+            rejected.extend(
+                _at_stage(r, "refine") for r in refinements.values() if isinstance(r, Rejection)
+            )
+            refinements.clear()
+            refining[0] = _at_the_lead(ctx, f"the replay proof of {best.strategy.name}")
+            lower_bound = minimum_refinement_cost(refining[0], candidates)
+            remaining = list(candidates)
     rejected.extend(
         _at_stage(r, "refine") for r in refinements.values() if isinstance(r, Rejection)
     )

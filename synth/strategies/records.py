@@ -406,6 +406,9 @@ class Rejection:
     reason: str
     cause: str | None = None
     stage: str | None = None
+    refuted: str | None = None
+    """The planner's belief a failed proof refuted: ``dr_ok`` when a trial missed the hole (its
+    pin was not captured where Δr_ok said it would be), else None."""
 
     @property
     def kind(self) -> str:
