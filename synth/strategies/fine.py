@@ -12,7 +12,9 @@ configurations the program moves through (each solved nearest the one before it)
    turned by ζ), with the pin end on the surface there, where a miss stops;
 3. tap: tap via → the tapping place on the surface, swept;
 4. let-go: the fingers opened to the let-go opening at the seat, the pin standing seated;
-5. get-clear: the hand backing off from the seat, swept, the pin standing seated.
+5. get-clear: the hand backing off from the seat, swept, the pin standing seated; and solved
+   again from the seat displaced to each corner of where the hand truly stops
+   (:func:`seat_displacements`), since the program backs off from there.
 
 The hand follows the target part in these moves (the pin touches it or sits in it), so the
 part and the arm keep the clearance only, the other solids their own directional margins
@@ -23,6 +25,7 @@ contact). A candidate with an obstructed fine motion is rejected, the bodies nam
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Sequence
 
@@ -122,4 +125,84 @@ def fine_motion_obstruction(
     q_clear = ctx.nearest(target, cand.q_destination)
     if q_clear is None:
         return "no arm solution where the hand gets clear"
+    spread = _unreached_get_clear(ctx, strategy, cand.q_destination, target)
+    if spread is not None:
+        return spread
     return _sweep(ctx, open_scene, [cand.q_destination, q_clear], f"get-clear from {hole}", options)
+
+
+def seat_displacements(ctx: PlanContext, strategy: PinInHoleStrategy) -> list[tuple[str, pin.SE3]]:
+    """Where the seated hand may truly be: world displacements C (hand = C ∘ nominal hand).
+
+    With F the pin's error against the hole when the hand is where the program believes (the
+    footprint), the search and the guarded move end with the pin in the true hole, so the hand
+    stops displaced from its believed seat by its own error less F: the hole's error cancels.
+    The box is the footprint (±dx × ±dy turned by ζ in the hole plane, ±Δz along its axis:
+    before any tap, which corrects the program's belief, not where the true hole is) widened by
+    the hand's largest translation tolerance; the hand keeps its commanded turn but for its own
+    rotation error.
+    Returned: the corners of the box, and a turn by the hand's largest rotation tolerance
+    either way about each world axis through the seat; each with its description. Corners,
+    not a certified bound: the joints vary smoothly over a box this small.
+    """
+    footprint = strategy.errors
+    hand = {} if ctx.hand_error is None else ctx.hand_error.bounds()
+
+    def widest(names: tuple[str, ...]) -> float:
+        return max((max(-hand[n].lo, hand[n].hi) for n in names if n in hand), default=0.0)
+
+    shift, turn = widest(("x", "y", "z")), widest(("rx", "ry", "rz"))
+    half = np.full(3, shift)  # in the footprint's frame: the hole's, turned by ζ
+    zeta = 0.0
+    if footprint is not None:
+        half = half + np.array([footprint.dx, footprint.dy, footprint.dz])
+        zeta = footprint.zeta
+    c, s = math.cos(zeta), math.sin(zeta)
+    world_from_box = ctx.world_hole.rotation @ np.array(
+        [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
+    )
+    axes = [k for k in range(3) if half[k] > 1e-12]
+    out: list[tuple[str, pin.SE3]] = []
+    for signs in itertools.product((-1.0, 1.0), repeat=len(axes)):
+        local = np.zeros(3)
+        for k, sign in zip(axes, signs, strict=True):
+            local[k] = sign * half[k]
+        vector = world_from_box @ local
+        words = ", ".join(f"{'xyz'[k]} {100 * vector[k]:+.2f} cm" for k in range(3))
+        out.append((words, pin.SE3(np.eye(3), vector)))
+    if turn > 1e-12:
+        centre = ctx.world_hole.translation
+        for k in range(3):
+            for sign in (-1.0, 1.0):
+                rotation = pin.exp3(sign * turn * np.eye(3)[k])
+                about = pin.SE3(rotation, centre - rotation @ centre)  # a turn about the seat
+                out.append((f"r{'xyz'[k]} {math.degrees(sign * turn):+.2f}°", about))
+    return out
+
+
+def _unreached_get_clear(
+    ctx: PlanContext, strategy: PinInHoleStrategy, q_seat: Configuration, target: pin.SE3
+) -> str | None:
+    """Why the get-clear may be out of the arm's reach once the seat is displaced, or None.
+
+    The program backs the hand off from where it truly stopped (``BMANIP*TRANS(…)``, or the
+    retreat's part-relative frame), so its joint targets follow the hole's true place: the
+    retreat is solved from each displaced seat (:func:`seat_displacements`) by the replay's
+    rule, nearest the seat's configuration. A nominal retreat at a joint's limit fails the
+    trials that push it across.
+    """
+    away = strategy.get_clear
+    seated = ctx.arm.forward(q_seat)
+    for words, displacement in seat_displacements(ctx, strategy):
+        q = ctx.nearest(displacement * seated, q_seat)
+        if q is None:
+            return f"no arm solution at the seat in {ctx.hole_al} displaced by the errors ({words})"
+        moved = (
+            ctx.arm.forward(q) * away.xf if away.base == strategy.hand else displacement * target
+        )
+        if ctx.nearest(moved, q) is None:
+            return (
+                f"no arm solution where the hand gets clear from its seat in {ctx.hole_al} "
+                f"displaced by the errors ({words}): the retreat is near a joint's limit"
+            )
+    return None
