@@ -35,11 +35,12 @@ from synth.errors.estimate import RelationModel, estimate_errors
 from synth.models.spec import WORLD
 from synth.models.world import World
 from synth.strategies.approach import Candidate
+from synth.strategies.beside import false_seat_problem
 from synth.strategies.context import PlanContext
 from synth.strategies.fine import fine_motion_obstruction
 from synth.strategies.footprint import estimate_footprint, footprint_tables
 from synth.strategies.hypotheses import Accuracy, Tapped
-from synth.strategies.records import PinInHoleStrategy, Rejection
+from synth.strategies.records import ErrorFootprint, PinInHoleStrategy, Rejection
 from synth.strategies.relations import approach_relation, hole_only_relation
 from synth.strategies.search import (
     plan_search,
@@ -138,22 +139,60 @@ def refine(ctx: PlanContext, cand: Candidate) -> Refined | Rejection:
     world = cand.world.with_facts(
         Accuracy(ctx.pin_al, ctx.hole_al, fp.dx, fp.dy, fp.dz, fp.zeta, fp.dtheta)
     )
+    made, beside = _fine_motions(ctx, cand, fp, world, decisions, z_limit, None)
+    if not beside:
+        return made
+    # a miss beside the face would pass the success test: a tap narrows Δz, and the test with it
+    why = (
+        f"without one, Δz = {_cm(fp.dz)} lets a pin gone down beside {ctx.hole_al}'s face pass "
+        "the success test"
+    )
+    tapped, _ = _fine_motions(ctx, cand, fp, world, decisions, z_limit, why)
+    if isinstance(tapped, Refined):
+        return tapped
+    assert isinstance(made, Rejection)
+    return dataclasses.replace(made, reason=f"{made.reason}; with a tap: {tapped.reason}")
+
+
+def _fine_motions(
+    ctx: PlanContext,
+    cand: Candidate,
+    fp: ErrorFootprint,
+    world: World,
+    decisions: list[str],
+    z_limit: float,
+    tap_reason: str | None,
+) -> tuple[Refined | Rejection, bool]:
+    """The tap and search of §4.5.2–4.5.3, and the checks of the fine motions they make.
+
+    A tap when Δz exceeds ``z_limit``, or when ``tap_reason`` asks for one. Returns the refined
+    strategy or the rejection, and whether the rejection is a false seat beside the face
+    (:mod:`~synth.strategies.beside`) of a strategy without a tap.
+    """
+    opts, ins = ctx.options, ctx.insertion
+    decisions = list(decisions)
     tap = None
     dz = fp.dz
-    if fp.dz > z_limit:
+    if fp.dz > z_limit or tap_reason is not None:
         made = plan_tap(ctx, cand, fp)
         if isinstance(made, Rejection):
-            return made
+            return made, False
         tap = made
         dz = tap.dz_after
         if dz > z_limit:
-            return Rejection(
+            rejection = Rejection(
                 cand.name,
                 f"even after tapping, Δz = {_cm(dz)} exceeds τ·(d_f − d_s)/(1 + τ) = "
                 f"{_cm(z_limit)}",
             )
+            return rejection, False
+        because = (
+            f"Δz = {_cm(fp.dz)} exceeds τ·(d_f − d_s)/(1 + τ) = {_cm(z_limit)}"
+            if tap_reason is None
+            else tap_reason
+        )
         decisions.append(
-            f"tap: Δz = {_cm(fp.dz)} exceeds τ·(d_f − d_s)/(1 + τ) = {_cm(z_limit)}; tapping place "
+            f"tap: {because}; tapping place "
             f"({100 * tap.offset[0]:.2f}, {100 * tap.offset[1]:.2f}) cm from {ctx.hole_al} on "
             f"{tap.surface}, {_cm(tap.clearance)} clear of holes and edges; Δz after the tap "
             f"{_cm(dz)} (LP), extra time {tap.time:.2f} s"
@@ -169,12 +208,12 @@ def refine(ctx: PlanContext, cand: Candidate) -> Refined | Rejection:
         step = opts.search_step_fraction * ins.dr_ok
         too_large = search_size_problem(fp.dx, fp.dy, ins.dr_ok, step)  # before enumerating
         if too_large is not None:
-            return Rejection(cand.name, too_large)
+            return Rejection(cand.name, too_large), False
         search = plan_search(fp.dx, fp.dy, fp.zeta, ins.dr_ok, cand.try_time, opts)
         other_time = cand.strategy.gross_time + (0.0 if tap is None else tap.time)
         too_long = search_time_problem(search, cand.try_time, other_time, MAX_TIME)
         if too_long is not None:
-            return Rejection(cand.name, too_long)
+            return Rejection(cand.name, too_long), False
         decisions.append(
             f"search: error footprint ±{_cm(fp.dx)} × ±{_cm(fp.dy)} (ζ = {_deg(fp.zeta)}) "
             f"exceeds Δr_ok = {_cm(ins.dr_ok)}; {search.rings} rings of {_cm(search.step)}, "
@@ -204,8 +243,11 @@ def refine(ctx: PlanContext, cand: Candidate) -> Refined | Rejection:
     )
     obstructed = fine_motion_obstruction(ctx, cand, strategy)
     if obstructed is not None:
-        return Rejection(cand.name, obstructed)
-    return Refined(strategy, world, cand)
+        return Rejection(cand.name, obstructed), False
+    false_seat = false_seat_problem(ctx, strategy)
+    if false_seat is not None:
+        return Rejection(cand.name, false_seat, cause="depth"), tap is None
+    return Refined(strategy, world, cand), False
 
 
 def minimum_refinement_cost(ctx: PlanContext, candidates: Sequence[Candidate]) -> float:

@@ -1,0 +1,76 @@
+"""A pin gone beside the part, its hand on the part's face (synth.strategies.beside).
+
+Oracles: the hand's lowest point in closed form, ``h = d − r_pad (sin γ + |cos γ|)`` for the
+parametric hand (its finger plates reach one pad radius past the pads' centre along the
+approach and across it), and the replay, which finds the false seat in the plan made without
+the check and none in the plan with it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from _paths import DATA_TASKS, SEED_TASK
+from _tasks import synthesized
+
+from synth.codegen.emitter import emit_program
+from synth.models.believed import believed_graph
+from synth.models.loader import load_task
+from synth.replay.run import replay_context, run_trial
+from synth.strategies import plan_task
+from synth.strategies.beside import hand_height_above_end
+from synth.strategies.context import end_from_hand, plan_context
+from synth.units import INCH
+
+BESIDE = DATA_TASKS / "beside_the_box.yaml"
+
+
+def test_the_hands_lowest_point_is_the_fingers_edge_in_closed_form() -> None:
+    spec = load_task(SEED_TASK)
+    ctx = plan_context(spec)
+    seen = set()
+    for strategy in plan_task(spec, options=None).candidates:
+        grasp = strategy.pickup.grasp
+        h = hand_height_above_end(ctx.hand, end_from_hand(ctx, grasp), ctx.pin_shape.diameter)
+        # a finger plate spans ±r_pad across the approach and reaches r_pad along it
+        expected = grasp.distance - 0.25 * INCH * (
+            math.sin(grasp.gamma) + abs(math.cos(grasp.gamma))
+        )
+        assert h == pytest.approx(expected, abs=1e-9)
+        seen.add(round(math.degrees(grasp.gamma)))
+    assert {135, 180} <= seen  # 2.64 cm and 2.91 cm above the tip for d = 3.542 cm
+
+
+def test_a_miss_beside_the_box_is_tapped_against(monkeypatch) -> None:
+    # Without the check the plan has no tap (Δz 0.635 cm is under τ(d_f − d_s)/(1 + τ)), and
+    # in trial 18 of seed 0 the pin goes down beside the box until the fingers land on it,
+    # 0.56 cm from the believed seat, inside the success test's 0.85 cm: the program reports
+    # an insertion that did not happen.
+    spec = load_task(BESIDE)
+    graph = believed_graph(spec)
+    monkeypatch.setattr("synth.strategies.refine.false_seat_problem", lambda *a, **k: None)
+    unchecked = plan_task(spec).strategy
+    monkeypatch.undo()
+    assert unchecked.tap is None
+    context = replay_context(emit_program(unchecked, graph), spec)
+    fooled = run_trial(context, 0, 18)
+    assert fooled.outcome == "failure" and "PIN1 is not in BH1" in fooled.message
+    # With it the planner taps first: Δz after the tap (0.359 cm) narrows the test, and the
+    # same world aborts or succeeds honestly
+    synthesis = synthesized(BESIDE, trials=100)
+    strategy = synthesis.strategy
+    assert strategy.tap is not None and strategy.tap.dz_after < unchecked.errors.dz
+    assert any("beside BH1's face pass the success test" in d for d in strategy.decisions)
+    assert synthesis.proof.passed and synthesis.proof.outcomes == {"success": 100}
+    checked = replay_context(synthesis.program, spec)
+    assert run_trial(checked, 0, 18).outcome == "success"
+
+
+@pytest.mark.slow
+def test_the_tapped_plan_beside_the_box_is_proven() -> None:
+    # 1 000 trials through the exact chain (the untapped plan: 3 of the first 300 fooled)
+    synthesis = synthesized(BESIDE, trials=100)
+    context = replay_context(synthesis.program, synthesis.task)
+    outcomes = [run_trial(context, 0, i).outcome for i in range(1000)]
+    assert outcomes.count("success") == 1000
