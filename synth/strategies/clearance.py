@@ -47,7 +47,10 @@ with the closest distance the pair reaches along the motion and the distance it 
 The fine motions at the target hole (:mod:`synth.strategies.fine`) use :meth:`fine` and
 :meth:`letting_go`: there the hand follows the target part (the pin touches it or sits in
 it), so the part and the hand keep the clearance only, the other solids their own margins, and
-the pin may touch the part (its tip enters the hole or lands on the surface).
+the pin may touch the part (its tip enters the hole or lands on the surface). Once the pin is
+seated the hand follows the hole's place but not the part's turn: the let-go and the get-clear
+are swept again with the part turned about the seat to each extreme of its rotation error
+(:meth:`GrossMotionCheck.seat_turns`).
 """
 
 from __future__ import annotations
@@ -79,6 +82,7 @@ from synth.strategies.records import Grasp
 
 __all__ = [
     "GrossMotionCheck",
+    "SeatTurn",
     "link_displacement",
     "link_margin",
     "solid_displacement",
@@ -155,6 +159,15 @@ def _pair_distance(scene: CollisionScene, q: NDArray[np.float64], k: int) -> flo
 
 CLOSEST_SAMPLES = 24
 """Samples of the rest of the segment where a sweep stopped, for the closest distance [1]."""
+
+
+@dataclass(frozen=True, eq=False)
+class SeatTurn:
+    """A part turned under the hand about the seat: ``solids`` (AL names) moved by ``motion``."""
+
+    words: str
+    motion: pin.SE3
+    solids: frozenset[str]
 
 
 @dataclass(eq=False)
@@ -272,19 +285,80 @@ class GrossMotionCheck:
             self._scenes[key] = scene
         return scene
 
-    def letting_go(self, opening: float, seated: pin.SE3, part: str | None) -> CollisionScene:
-        """The empty hand at ``opening`` with the pin seated at ``seated`` (world) in ``part``."""
-        key = ("let go", round(opening, 9), tuple(np.round(seated.homogeneous, 9).reshape(-1)))
+    def letting_go(
+        self,
+        opening: float,
+        seated: pin.SE3,
+        part: str | None,
+        turn: SeatTurn | None = None,
+    ) -> CollisionScene:
+        """The empty hand at ``opening`` with the pin seated at ``seated`` (world) in ``part``.
+
+        ``turn``: the solids it names, and the seated pin with them, moved by its ``motion``
+        (a part turned under the hand about the seat: :class:`SeatTurn`).
+        """
+        motion = pin.SE3.Identity() if turn is None else turn.motion
+        names = frozenset() if turn is None else turn.solids
+        key = (
+            "let go",
+            round(opening, 9),
+            tuple(np.round(seated.homogeneous, 9).reshape(-1)),
+            tuple(np.round(motion.homogeneous, 9).reshape(-1)),
+            names,
+        )
         scene = self._scenes.get(key)
         if scene is None:
-            standing = Obstacle(self.carried.name, self.carried.geometry, seated)
+            solids = tuple(
+                Obstacle(o.name, o.geometry, motion * o.pose) if o.name in names else o
+                for o in self.solids
+            )
+            standing = Obstacle(
+                self.carried.name,
+                self.carried.geometry,
+                seated if turn is None else motion * seated,
+            )
             scene = CollisionScene(
                 self.arm,
-                (*self.solids, standing),
+                (*solids, standing),
                 opening=min(opening, self._max_opening),
             )
             self._scenes[key] = scene
         return scene
+
+    def seat_turns(
+        self, graph: AttributeGraph, hole_frame: str, seat: NDArray[np.float64]
+    ) -> list[SeatTurn]:
+        """The hole's part turned under the hand about the ``seat`` (world), to each extreme.
+
+        A pin seated in the hole holds the hand to the hole's true place h: with L the part's
+        true placement against the believed one, a point p of the part moves by L(p) − p and
+        the hand by L(h) − h, which leaves p displaced from the hand by (R − I)(p − h): the
+        part's rotation error R about the seat is all that is left (the hand keeps its
+        commanded turn). Per uncertain link above the hole, a turn by ± each of its angle bounds
+        about its own axis through h, moving every solid under the link. A box turned 5° about
+        a hole 0.6 cm from its edge moves that edge about 1 mm under fingers opened over it.
+        Extremes, not a certified bound, as for the displaced seats of the get-clear
+        (:func:`synth.strategies.fine.seat_displacements`): the angles are small.
+        """
+        by_frame = self.solid_frames
+        turns: list[SeatTurn] = []
+        for name in graph.ancestors(hole_frame)[:-1]:  # without the world
+            block = graph.links[name].uncertainty
+            bounds = {} if block is None else block.bounds()
+            under = frozenset(o for o, f in by_frame.items() if name in graph.ancestors(f))
+            axes = graph.world_from(name).rotation
+            for k, axis in enumerate(("rx", "ry", "rz")):
+                if axis not in bounds:
+                    continue
+                for angle in (bounds[axis].lo, bounds[axis].hi):
+                    if abs(angle) < 1e-12:
+                        continue
+                    rotation = pin.exp3(angle * axes[:, k])
+                    motion = pin.SE3(rotation, seat - rotation @ seat)
+                    label = graph.al_names.get(name, name)
+                    words = f"{label} turned {axis} {math.degrees(angle):+.2f}° about the seat"
+                    turns.append(SeatTurn(words, motion, under))
+        return turns
 
     def options_for(self, scene: CollisionScene) -> SweepOptions:
         """The margins of ``scene``: holding the pin, or with the pin standing in the cell."""

@@ -16,6 +16,10 @@ configurations the program moves through (each solved nearest the one before it)
    again from the seat displaced to each corner of where the hand truly stops
    (:func:`seat_displacements`), since the program backs off from there.
 
+4 and 5 are swept again with the part (and the pin in it) turned about the seat to each
+extreme of the part's rotation error: the hand follows the hole's place, not the part's turn
+(:meth:`~synth.strategies.clearance.GrossMotionCheck.seat_turns`).
+
 The hand follows the target part in these moves (the pin touches it or sits in it), so the
 part and the arm keep the clearance only, the other solids their own directional margins
 (:meth:`~synth.strategies.clearance.GrossMotionCheck.fine_options`); the held pin may touch the
@@ -113,10 +117,13 @@ def fine_motion_obstruction(
         if reason is not None:
             return reason
     seated = _pin_world(ctx, strategy.destination)
-    open_scene = gross.letting_go(strategy.let_go_opening, seated, part)
-    reason = _sweep(ctx, open_scene, [cand.q_destination], f"let-go in {hole}", options)
-    if reason is not None:
-        return reason
+    turns = [None, *gross.seat_turns(ctx.graph, ctx.hole_frame, ctx.world_hole.translation)]
+    scenes = [(t, gross.letting_go(strategy.let_go_opening, seated, part, t)) for t in turns]
+    for turn, scene in scenes:
+        motion = f"let-go in {hole}" + ("" if turn is None else f" ({turn.words})")
+        reason = _sweep(ctx, scene, [cand.q_destination], motion, options)
+        if reason is not None:
+            return reason
     away = strategy.get_clear
     if away.base == strategy.hand:
         target = ctx.arm.forward(cand.q_destination) * away.xf
@@ -128,7 +135,12 @@ def fine_motion_obstruction(
     spread = _unreached_get_clear(ctx, strategy, cand.q_destination, target)
     if spread is not None:
         return spread
-    return _sweep(ctx, open_scene, [cand.q_destination, q_clear], f"get-clear from {hole}", options)
+    for turn, scene in scenes:
+        motion = f"get-clear from {hole}" + ("" if turn is None else f" ({turn.words})")
+        reason = _sweep(ctx, scene, [cand.q_destination, q_clear], motion, options)
+        if reason is not None:
+            return reason
+    return None
 
 
 def seat_displacements(ctx: PlanContext, strategy: PinInHoleStrategy) -> list[tuple[str, pin.SE3]]:
