@@ -3,7 +3,9 @@
 Oracles: the hand's lowest point in closed form, ``h = d − r_pad (sin γ + |cos γ|)`` for the
 parametric hand (its finger plates reach one pad radius past the pads' centre along the
 approach and across it), and the replay, which finds the false seat in the plan made without
-the check and none in the plan with it.
+the check and none in the plan with it; for a pin leaning on the face's edge, the trace's pin
+pose against the sampled box: the axis beyond the edge by less than the pin's radius and more
+than its tip's, the end less than the taper's length below the face.
 """
 
 from __future__ import annotations
@@ -17,13 +19,15 @@ from _tasks import synthesized
 from synth.codegen.emitter import emit_program
 from synth.models.believed import believed_graph
 from synth.models.loader import load_task
-from synth.replay.run import replay_context, run_trial
+from synth.replay.run import replay_context, run_trial, trial_world
+from synth.replay.trace import record_run
 from synth.strategies import plan_task
 from synth.strategies.beside import hand_height_above_end
 from synth.strategies.context import end_from_hand, plan_context
 from synth.units import INCH
 
 BESIDE = DATA_TASKS / "beside_the_box.yaml"
+EDGE = DATA_TASKS / "taper_on_the_edge.yaml"
 
 
 def test_the_hands_lowest_point_is_the_fingers_edge_in_closed_form() -> None:
@@ -74,3 +78,36 @@ def test_the_tapped_plan_beside_the_box_is_proven() -> None:
     context = replay_context(synthesis.program, synthesis.task)
     outcomes = [run_trial(context, 0, i).outcome for i in range(1000)]
     assert outcomes.count("success") == 1000
+
+
+def test_a_pin_leaning_its_taper_on_the_faces_edge_is_refused(monkeypatch) -> None:
+    spec = load_task(EDGE)
+    graph = believed_graph(spec)
+    monkeypatch.setattr("synth.strategies.refine.false_seat_problem", lambda *a, **k: None)
+    unchecked = plan_task(spec).strategy
+    monkeypatch.undo()
+    # Without the check: no tap, Δz 0.36 cm, t = Δz/τ = 0.48 cm around d_f = 0.9 cm (τ = 0.75,
+    # PlanOptions.tau)
+    assert unchecked.tap is None
+    assert unchecked.success_threshold == pytest.approx(unchecked.errors.dz / 0.75)
+    context = replay_context(emit_program(unchecked, graph), spec)
+    trace = record_run(context, trial=34, seed=0)
+    assert trace.report.outcome == "failure"
+    assert "PIN1 is not in BH1: it rests on BOX" in trace.report.message
+    # where it leans, in the sampled box's frame (its top face 4.9 cm up, its +x side 4.45 cm
+    # out): past the edge by more than the tip's radius and less than the pin's, the end less
+    # than the taper's length (0.25 cm) below the face
+    box = trial_world(context, 0, 34)[0].pose("box")
+    end = box.actInv(trace.samples[-1].pins["PIN1"])
+    beyond = end.translation[0] - 0.0445
+    assert 0.091e-2 < beyond < 0.629e-2 / 2
+    assert 0.0 < 0.049 - end.translation[2] < 0.25e-2
+    # With the check the candidate is refused (no tap place on the face is clear enough) and
+    # the chosen plan's success test leaves the taper's range out: d_f − t − Δz > L_t
+    plan = plan_task(spec)
+    why = [r.reason for r in plan.rejected if r.candidate == unchecked.name]
+    assert why and "rests its taper on the edge" in why[0]
+    chosen = plan.strategy
+    dz = chosen.errors.dz if chosen.tap is None else chosen.tap.dz_after
+    assert 0.009 - chosen.success_threshold - dz > 0.0025
+    assert run_trial(replay_context(emit_program(chosen, graph), spec), 0, 34).outcome == "success"

@@ -11,14 +11,19 @@ test with the pin beside the hole: the program reports an insertion that did not
 box known to ±0.2 in in height on the Stanford arm, a 0.635 cm pin held straight down, h = 2.9
 cm, d_f = 1.71 cm, t = 0.85 cm, Δz = 0.64 cm: 3 of 300 trials). Such a candidate is refused.
 
+Nearer the edge the pin does not go beside at all: its axis beyond the edge by less than its
+radius, it rests its taper on the edge, the end anywhere from the face down to the taper's
+length below it (0.2 cm in a world of a 0.63 cm pin whose program had d_f = 0.9 cm, t = 0.48
+cm, Δz = 0.36 cm: the test passed a pin leaning on the box's edge). That range must lie outside
+the test's window too, as a miss on the face does (d_f − Δz > t) with d_f less the taper.
+
 The pin can go beside the part only if a place it may come down at, some attempt's offset less
 the footprint (±dx × ±dy turned by ζ), lies off the face's outline; this is checked with shapely
-on the outline (the face's own frame) and the attempts' footprint boxes.
+on the outline (the face's own frame) and the attempts' footprint boxes
+(:func:`~synth.strategies.landing.landing_region`).
 """
 
 from __future__ import annotations
-
-import math
 
 import numpy as np
 import pinocchio as pin
@@ -27,7 +32,7 @@ import shapely
 from synth.models.arm.hand import finger_placement
 from synth.models.spec import HandSpec, SurfaceShape
 from synth.strategies.context import PlanContext, end_from_hand
-from synth.strategies.fine import search_offsets
+from synth.strategies.landing import landing_region
 from synth.strategies.records import PinInHoleStrategy
 
 __all__ = ["false_seat_problem", "hand_height_above_end"]
@@ -62,29 +67,23 @@ def hand_height_above_end(hand: HandSpec, end_from_hand_: pin.SE3, opening: floa
 
 def _can_go_beside(ctx: PlanContext, strategy: PinInHoleStrategy) -> bool:
     """Whether some attempt may bring the pin down off the hole's face (module docstring)."""
-    footprint = strategy.errors
-    surface = ctx.hole_shape.surface
-    shape = ctx.graph.node(surface).shape
-    if footprint is None or not isinstance(shape, SurfaceShape):
+    shape = ctx.graph.node(ctx.hole_shape.surface).shape
+    region = landing_region(ctx, strategy)
+    if region is None or not isinstance(shape, SurfaceShape):
         return False
-    face_from_hole = ctx.graph.relative(surface, ctx.hole_frame)
-    c, s = math.cos(footprint.zeta), math.sin(footprint.zeta)
-    turn = np.array([[c, -s], [s, c]])
-    box = turn @ np.array(
-        [[-footprint.dx, footprint.dx, footprint.dx, -footprint.dx],
-         [-footprint.dy, -footprint.dy, footprint.dy, footprint.dy]]
-    )  # fmt: skip
-    to_face = face_from_hole.rotation[:2, :2]
-    origin = face_from_hole.translation[:2]
-    places = []
-    for x, y in [(0.0, 0.0), *search_offsets(strategy)]:
-        corners = origin[:, None] + to_face @ (np.array([[x], [y]]) - box)
-        places.append(shapely.Polygon(corners.T))
-    return not shapely.Polygon(shape.outline).covers(shapely.union_all(places))
+    return not shapely.Polygon(shape.outline).covers(region)
 
 
 def false_seat_problem(ctx: PlanContext, strategy: PinInHoleStrategy) -> str | None:
-    """Why a pin beside the part could pass the program's success test, or None."""
+    """Why a pin beside the part could pass the program's success test, or None.
+
+    Two ways to stop off the face's edge (module docstring): the hand landing on the face, the
+    pin end ``h`` below it; or the pin's taper resting on the edge, its axis beyond the edge by
+    u with r_tip < u < r_pin, the end ``L_t (u − r_tip)/(r_pin − r_tip)`` below the face: any
+    depth in [0, L_t). A depth u passes the test when |d_f − u| ≤ t + Δz, so the taper's range
+    does when d_f − t − Δz < L_t (the window of a miss on the face, d_f − Δz > t, with d_f less
+    the taper).
+    """
     footprint = strategy.errors
     if footprint is None or not _can_go_beside(ctx, strategy):
         return None
@@ -92,11 +91,22 @@ def false_seat_problem(ctx: PlanContext, strategy: PinInHoleStrategy) -> str | N
     h = hand_height_above_end(ctx.hand, end_from_hand(ctx, grasp), ctx.pin_shape.diameter)
     dz = footprint.dz if strategy.tap is None else strategy.tap.dz_after
     d_f, threshold = ctx.insertion.d_f, strategy.success_threshold
+    taper = ctx.pin_shape.tip_taper_length
+    window = (
+        f"within the success test's {100 * threshold:.3g} cm (± Δz {100 * dz:.3g} cm) of "
+        f"d_f = {100 * d_f:.3g} cm: a miss would pass for an insertion"
+    )
+    tapered = ctx.pin_shape.tip_radius < ctx.pin_shape.diameter / 2
+    if tapered and taper > 0.0 and d_f - threshold - dz < taper:
+        return (
+            f"a pin that comes down just past {ctx.hole_al}'s face's edge (the footprint and "
+            f"search reach past it) rests its taper on the edge with its end up to "
+            f"{100 * taper:.3g} cm below the face, {window}"
+        )
     if abs(d_f - h) > threshold + dz:
         return None
     return (
         f"a pin that goes down beside {ctx.hole_al}'s face (the footprint and search reach past "
         f"its edge) stops when the hand lands on the face {100 * h:.2f} cm above the pin end, "
-        f"within the success test's {100 * threshold:.3g} cm (± Δz {100 * dz:.3g} cm) of "
-        f"d_f = {100 * d_f:.3g} cm: a miss would pass for an insertion"
+        f"{window}"
     )
