@@ -83,7 +83,9 @@ def test_the_tapped_plan_beside_the_box_is_proven() -> None:
 def test_a_pin_leaning_its_taper_on_the_faces_edge_is_refused(monkeypatch) -> None:
     spec = load_task(EDGE)
     graph = believed_graph(spec)
-    monkeypatch.setattr("synth.strategies.refine.false_seat_problem", lambda *a, **k: None)
+    # (its search also reaches BH3, which the other check refuses: synth.strategies.wrong_hole)
+    for check in ("false_seat_problem", "wrong_hole_problem"):
+        monkeypatch.setattr(f"synth.strategies.refine.{check}", lambda *a, **k: None)
     unchecked = plan_task(spec).strategy
     monkeypatch.undo()
     # Without the check: no tap, Δz 0.36 cm, t = Δz/τ = 0.48 cm around d_f = 0.9 cm (τ = 0.75,

@@ -49,6 +49,7 @@ from synth.strategies.search import (
     search_time_problem,
 )
 from synth.strategies.tapping import plan_tap
+from synth.strategies.wrong_hole import wrong_hole_problem
 from synth.units import DEG
 
 
@@ -142,15 +143,18 @@ def refine(ctx: PlanContext, cand: Candidate) -> Refined | Rejection:
     made, beside = _fine_motions(ctx, cand, fp, world, decisions, z_limit, None)
     if not beside:
         return made
-    # a miss beside the face would pass the success test: a tap narrows Δz, and the test with it
-    why = (
-        f"without one, Δz = {_cm(fp.dz)} lets a pin gone down beside {ctx.hole_al}'s face pass "
-        "the success test"
+    # a miss beside the face, or a pin in another hole, would pass the success test: a tap
+    # narrows Δz, and the test with it
+    assert isinstance(made, Rejection)
+    where = (
+        f"a pin gone down beside {ctx.hole_al}'s face"
+        if made.cause == "depth"
+        else f"a pin in another hole than {ctx.hole_al}"
     )
+    why = f"without one, Δz = {_cm(fp.dz)} lets {where} pass the success test"
     tapped, _ = _fine_motions(ctx, cand, fp, world, decisions, z_limit, why)
     if isinstance(tapped, Refined):
         return tapped
-    assert isinstance(made, Rejection)
     return dataclasses.replace(made, reason=f"{made.reason}; with a tap: {tapped.reason}")
 
 
@@ -166,8 +170,9 @@ def _fine_motions(
     """The tap and search of §4.5.2–4.5.3, and the checks of the fine motions they make.
 
     A tap when Δz exceeds ``z_limit``, or when ``tap_reason`` asks for one. Returns the refined
-    strategy or the rejection, and whether the rejection is a false seat beside the face
-    (:mod:`~synth.strategies.beside`) of a strategy without a tap.
+    strategy or the rejection, and whether the rejection is one a tap may lift, in a strategy
+    without one: a false seat beside the face (:mod:`~synth.strategies.beside`) or in another
+    hole (:mod:`~synth.strategies.wrong_hole`).
     """
     opts, ins = ctx.options, ctx.insertion
     decisions = list(decisions)
@@ -247,6 +252,9 @@ def _fine_motions(
     false_seat = false_seat_problem(ctx, strategy)
     if false_seat is not None:
         return Rejection(cand.name, false_seat, cause="depth"), tap is None
+    wrong_hole = wrong_hole_problem(ctx, strategy)
+    if wrong_hole is not None:
+        return Rejection(cand.name, wrong_hole, cause="footprint"), tap is None
     return Refined(strategy, world, cand), False
 
 

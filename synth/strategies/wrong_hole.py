@@ -1,0 +1,80 @@
+"""Another hole within the search's reach: a pin seated in the wrong hole, or dragged from it.
+
+The search tries points until the success test ``|DISTANCE_OFF| ≤ t`` passes (seed L2736). Where
+the places the pin end may come down at (:func:`~synth.strategies.landing.landing_region`) come
+within another open hole's lead (mouth radius − tip radius, all the replay captures) of its axis,
+some world drops the pin into that hole. Seated there at depth d_o (its depth, or where the hand
+lands first), DISTANCE_OFF = d_f − d_o + e with |e| ≤ Δz, and the program then
+
+* reads a seat, |d_f − d_o| ≤ t + Δz: it reports the insertion into the wrong hole;
+* reads nothing felt, d_o > d_f + t + Δz: it lifts the pin out and searches on, as for a miss
+  beside the part (harmless);
+* reads neither, otherwise: it moves on to the next point with the pin in the hole, dragging it.
+
+So another open hole within reach is harmless only when it is deeper than ``d_f + t + Δz``. On
+the seed's cell with the box known to ±0.6 in, ±0.4 in and ±10° and BH1 moved 3.5 cm from BH2
+(d_f = 1.64 cm, BH2 1.71 cm deep), 4 of 160 proof trials put PIN1 in BH2 and passed the test.
+Holes that hold another pin are not open; the pin's own start hole is, once the pin has left it.
+"""
+
+from __future__ import annotations
+
+import shapely
+
+from synth.models.spec import HoleShape
+from synth.strategies.beside import hand_height_above_end
+from synth.strategies.context import PlanContext, end_from_hand
+from synth.strategies.landing import landing_region
+from synth.strategies.records import PinInHoleStrategy
+
+__all__ = ["wrong_hole_problem"]
+
+
+def _occupied(ctx: PlanContext) -> set[str]:
+    """Holes (frame names) another pin stands in: the parents of the other pins' frames."""
+    graph = ctx.graph
+    return {
+        graph.parent(name)
+        for name, node in graph.nodes.items()
+        if node.kind == "pin" and name != ctx.pin_frame
+    }
+
+
+def wrong_hole_problem(ctx: PlanContext, strategy: PinInHoleStrategy) -> str | None:
+    """Why the search may seat the pin in another hole of the face, or None (module docstring)."""
+    region = landing_region(ctx, strategy)
+    footprint = strategy.errors
+    if region is None or footprint is None:
+        return None
+    graph, surface = ctx.graph, ctx.hole_shape.surface
+    occupied = _occupied(ctx)
+    pin_shape = ctx.pin_shape
+    grasp = strategy.pickup.grasp
+    h = hand_height_above_end(ctx.hand, end_from_hand(ctx, grasp), pin_shape.diameter)
+    dz = footprint.dz if strategy.tap is None else strategy.tap.dz_after
+    d_f, threshold = ctx.insertion.d_f, strategy.success_threshold
+    for name, node in graph.nodes.items():
+        shape = node.shape
+        if name == ctx.hole_frame or name in occupied or not isinstance(shape, HoleShape):
+            continue
+        if shape.surface != surface or shape.diameter <= pin_shape.diameter:
+            continue
+        lead = shape.diameter / 2 + shape.chamfer_width - pin_shape.tip_radius
+        centre = graph.relative(surface, name).translation[:2]
+        if region.distance(shapely.Point(*centre)) >= lead:
+            continue
+        depth = min(shape.depth, h)
+        if depth > d_f + threshold + dz:
+            continue  # read as nothing felt: lifted out, the search goes on
+        read = (
+            "passes the success test: the program would report the wrong insertion"
+            if abs(d_f - depth) <= threshold + dz
+            else "is read as neither a seat nor a miss: the next search move drags it"
+        )
+        return (
+            f"the search may find {node.al_name} instead of {ctx.hole_al}: the places the pin may "
+            f"come down at reach within {100 * lead:.3g} cm of its axis (its lead), and a pin "
+            f"{100 * depth:.3g} cm deep in it, against d_f = {100 * d_f:.3g} cm and the success "
+            f"test's {100 * threshold:.3g} cm (± Δz {100 * dz:.3g} cm), {read}"
+        )
+    return None

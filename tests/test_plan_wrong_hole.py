@@ -1,0 +1,70 @@
+"""Another hole within the search's reach (synth.strategies.wrong_hole).
+
+Oracle: the replay. In trial 14 of seed 0 the box is 1.45 cm and 6.7° from where it is
+believed and the plan made without the check drops PIN1 into BH2, 1.71 cm deep against BH1's
+d_f = 1.64 cm: the program passes its success test and ends, the referee finds the pin in BH2.
+With BH2 and BH3 drilled 3.5 cm deep (deeper than d_f + t + Δz = 1.85 cm, and than the hand's
+lowest point above the pin end, 2.27 cm, where it lands first), the same program in the same
+world lifts the pin out of BH2 as a miss beside the part and finds BH1.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+import yaml
+from _paths import DATA_TASKS
+
+from synth.codegen.emitter import emit_program
+from synth.exceptions import SynthError
+from synth.models.believed import believed_graph
+from synth.models.loader import load_task
+from synth.replay.run import replay_context, run_trial, trial_world
+from synth.replay.trace import record_run
+from synth.strategies import plan_task
+from synth.strategies.context import plan_context
+from synth.strategies.wrong_hole import wrong_hole_problem
+
+TWO_HOLES = DATA_TASKS / "two_holes_in_reach.yaml"
+
+
+def _deep(tmp_path: Path) -> Path:
+    """The task with BH2 and BH3 3.5 cm deep (the box is 4.9 cm tall)."""
+    spec = yaml.safe_load(TWO_HOLES.read_text(encoding="utf-8"))
+    for frame in spec["frames"]:
+        if frame["name"] in ("bh2", "bh3"):
+            frame["shape"]["depth"] = "3.5 cm"
+    path = tmp_path / "deep.yaml"
+    path.write_text(yaml.safe_dump(spec, sort_keys=False), encoding="utf-8")
+    return path
+
+
+def test_a_search_that_reaches_a_second_hole_as_deep_is_refused(monkeypatch, tmp_path) -> None:
+    spec = load_task(TWO_HOLES)
+    with pytest.raises(SynthError) as refused:
+        plan_task(spec)
+    first = str(refused.value).splitlines()[0]
+    assert "the position error is too large for a search" in first
+    assert "may find BH2 instead of BH1" in first and "passes the success test" in first
+
+    monkeypatch.setattr("synth.strategies.refine.wrong_hole_problem", lambda *a, **k: None)
+    unchecked = plan_task(spec).strategy
+    monkeypatch.undo()
+    wrong = run_trial(replay_context(emit_program(unchecked, believed_graph(spec)), spec), 0, 14)
+    assert wrong.outcome == "failure" and "PIN1 is in BH2, not in BH1" in wrong.message
+
+    # the same strategy where the other holes are deeper than the test's window: no problem,
+    # and the replay lifts the pin out of BH2 and goes on to BH1
+    deep = load_task(_deep(tmp_path))
+    assert wrong_hole_problem(plan_context(spec), unchecked) is not None
+    assert wrong_hole_problem(plan_context(deep), unchecked) is None
+    context = replay_context(emit_program(unchecked, believed_graph(deep)), deep)
+    lifted = record_run(context, trial=14, seed=0)
+    assert lifted.report.outcome == "success"
+    bh2 = trial_world(context, 0, 14)[0].pose("bh2")
+    inside = [bh2.actInv(s.pins["PIN1"]).translation for s in lifted.samples]
+    deepest = -min(p[2] for p in inside if math.hypot(p[0], p[1]) < 0.32e-2)
+    # down BH2 until the hand lands on the face (h = 2.27 cm), past the window's 1.85 cm
+    assert 1.85e-2 < deepest < 2.3e-2
