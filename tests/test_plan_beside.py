@@ -12,11 +12,13 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 from _paths import DATA_TASKS, SEED_TASK
 from _tasks import synthesized
 
 from synth.codegen.emitter import emit_program
+from synth.exceptions import SynthError
 from synth.models.believed import believed_graph
 from synth.models.loader import load_task
 from synth.replay.run import replay_context, run_trial, trial_world
@@ -28,6 +30,7 @@ from synth.units import INCH
 
 BESIDE = DATA_TASKS / "beside_the_box.yaml"
 EDGE = DATA_TASKS / "taper_on_the_edge.yaml"
+PANDA = DATA_TASKS / "panda_palm_past_the_edge.yaml"
 
 
 def test_the_hands_lowest_point_is_the_fingers_edge_in_closed_form() -> None:
@@ -36,7 +39,7 @@ def test_the_hands_lowest_point_is_the_fingers_edge_in_closed_form() -> None:
     seen = set()
     for strategy in plan_task(spec, options=None).candidates:
         grasp = strategy.pickup.grasp
-        h = hand_height_above_end(ctx.hand, end_from_hand(ctx, grasp), ctx.pin_shape.diameter)
+        h = hand_height_above_end(ctx, grasp)
         # a finger plate spans ±r_pad across the approach and reaches r_pad along it
         expected = grasp.distance - 0.25 * INCH * (
             math.sin(grasp.gamma) + abs(math.cos(grasp.gamma))
@@ -113,3 +116,44 @@ def test_a_pin_leaning_its_taper_on_the_faces_edge_is_refused(monkeypatch) -> No
     dz = chosen.errors.dz if chosen.tap is None else chosen.tap.dz_after
     assert 0.009 - chosen.success_threshold - dz > 0.0025
     assert run_trial(replay_context(emit_program(chosen, graph), spec), 0, 34).outcome == "success"
+
+
+def test_a_urdf_hands_own_bodies_set_where_it_lands(monkeypatch) -> None:
+    spec = load_task(PANDA)
+    graph = believed_graph(spec)
+    ctx = plan_context(spec)
+    monkeypatch.setattr("synth.strategies.refine.false_seat_problem", lambda *a, **k: None)
+    unchecked = plan_task(spec).strategy
+    monkeypatch.undo()
+    grasp = unchecked.pickup.grasp
+    assert round(math.degrees(grasp.gamma)) == 100
+    # the Panda's palm mesh, its vertices put in the pin end's frame: its lowest point, against
+    # Coal's distance to the half-space below the end (the parametric form says 0.97 cm)
+    scene = ctx.gross.holding(grasp)
+    hand = ctx.arm.forward(ctx.q_park)
+    end_hand = end_from_hand(ctx, grasp)
+    palm = next(b for b in scene.bodies if b.name == "palm")
+    placed = end_hand * hand.actInv(scene.body_pose(ctx.q_park, "palm"))
+    vertices = np.array([palm.geometry.vertex(i) for i in range(palm.geometry.num_vertices)])
+    lowest = float(np.min(vertices @ placed.rotation.T[:, 2] + placed.translation[2]))
+    h = hand_height_above_end(ctx, grasp)
+    assert h == pytest.approx(lowest, abs=1e-6) and h == pytest.approx(0.0201, abs=5e-5)
+    # Trial 0 of seed 0: the pin goes down beside the box until the palm lands on the face, the
+    # end at least h below it and inside the test's window, so the program lets go there and
+    # the opening palm hits the box
+    context = replay_context(emit_program(unchecked, graph), spec)
+    trace = record_run(context, trial=0, seed=0)
+    assert trace.report.outcome == "violation" and "palm hit BOX" in trace.report.message
+    box = trial_world(context, 0, 0)[0].pose("box")
+    opens = [s for s in trace.samples if s.motion == "open"]
+    end = box.actInv(opens[-1].pins["PIN1"]).translation
+    depth = 0.049 - end[2]
+    dz = unchecked.errors.dz
+    assert end[0] > 0.0445  # beside the box's +x side
+    assert h <= depth <= 0.0203 + unchecked.success_threshold + dz
+    # With the check every candidate is refused: the face's height is known exactly, but a tap
+    # reads it with the hand's own error and would not narrow Δz
+    with pytest.raises(SynthError) as refused:
+        plan_task(spec)
+    assert "2.01 cm above the pin end" in str(refused.value).splitlines()[0]
+    assert "with a tap: a tap would not narrow Δz" in str(refused.value)

@@ -18,7 +18,8 @@ from _paths import DATA_TASKS, SEED_TASK
 from synth.codegen.emitter import emit_program
 from synth.models.believed import believed_graph
 from synth.models.loader import load_task
-from synth.replay.run import replay_context, run_trial
+from synth.replay.run import replay_context, run_trial, trial_world
+from synth.replay.trace import record_run
 from synth.strategies import plan_task
 from synth.strategies.context import plan_context
 
@@ -58,12 +59,20 @@ def test_a_palm_over_the_edge_of_a_turned_box_is_refused_before_the_proof(monkey
     monkeypatch.setattr(
         "synth.strategies.clearance.GrossMotionCheck.seat_turns", lambda *a, **k: []
     )
+    # (the palm, 1.70 cm above the pin end, hangs past the edge below the face at the seat, so
+    # a pin gone down beside the box could pass the test too: synth.strategies.beside; in this
+    # world the pin is truly seated, the tip at BH1's bottom, and only the turn is at fault)
+    monkeypatch.setattr("synth.strategies.refine.false_seat_problem", lambda *a, **k: None)
     unturned = plan_task(spec).strategy
     monkeypatch.undo()
     grasp = unturned.pickup.grasp
     assert (round(math.degrees(grasp.omega)), round(math.degrees(grasp.gamma))) == (0, 100)
-    hit = run_trial(replay_context(emit_program(unturned, graph), spec), 0, 4)
-    assert hit.outcome == "violation" and "palm hit BOX" in hit.message
+    context = replay_context(emit_program(unturned, graph), spec)
+    hit = record_run(context, trial=4, seed=0)
+    assert hit.report.outcome == "violation" and "palm hit BOX" in hit.report.message
+    opens = [s for s in hit.samples if s.motion == "open"]
+    seated = trial_world(context, 0, 4)[0].pose("bh1").actInv(opens[-1].pins["PIN1"])
+    assert seated.translation == pytest.approx([0.0, 0.0, -0.0171], abs=1e-6)
     # With them that candidate is refused, naming the turn, and the chosen one lets go clear
     plan = plan_task(spec)
     why = [r.reason for r in plan.rejected if r.candidate == unturned.name]

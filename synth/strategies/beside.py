@@ -2,14 +2,18 @@
 
 Where the error footprint and the search reach past the edge of the hole's face, an attempt can
 send the pin down beside the part. It feels nothing until the hand itself comes down on the
-face, and then it stops with the pin end ``h`` below the face, ``h`` the height of the hand's
-lowest point above the pin end (the hand closed on the pin at its grasp). The program's test
-``|DISTANCE_OFF| ≤ t`` (seed L2736) compares the pin end with the believed seat, ``d_f`` below the
-believed face: DISTANCE_OFF = d_f − h + e, with e the face's height error against the belief
-(|e| ≤ Δz, after the tap when there is one). If ``|d_f − h| ≤ t + Δz`` some such world passes the
-test with the pin beside the hole: the program reports an insertion that did not happen (a
-box known to ±0.2 in in height on the Stanford arm, a 0.635 cm pin held straight down, h = 2.9
-cm, d_f = 1.71 cm, t = 0.85 cm, Δz = 0.64 cm: 3 of 300 trials). Such a candidate is refused.
+face, and then it stops with the pin end at least ``h`` below the face, ``h`` the height of the
+hand's lowest point above the pin end (the hand closed on the pin at its grasp): deeper when
+that point hangs past the edge and a higher one lands (:func:`hand_height_above_end`). The
+program's test ``|DISTANCE_OFF| ≤ t`` (seed L2736) compares the pin end with the believed seat,
+``d_f`` below the believed face: DISTANCE_OFF = d_f − u + e for a pin end u ≥ h below the face,
+with e the face's height error against the belief (|e| ≤ Δz, after the tap when there is one).
+If ``d_f + t + Δz ≥ h`` some such world passes the test with the pin beside the hole: the
+program reports an insertion that did not happen (a box known to ±0.2 in in height on the
+Stanford arm, a 0.635 cm pin held straight down, h = 2.9 cm, d_f = 1.71 cm, t = 0.85 cm,
+Δz = 0.64 cm: 3 of 300 trials; a Panda whose palm, 2.01 cm above the pin end, hangs past the
+box's edge at the seat, d_f = 2.03 cm: its pin stopped 2.35 cm down beside the box in the
+first trial). Such a candidate is refused.
 
 Nearer the edge the pin does not go beside at all: its axis beyond the edge by less than its
 radius, it rests its taper on the edge, the end anywhere from the face down to the taper's
@@ -25,44 +29,52 @@ on the outline (the face's own frame) and the attempts' footprint boxes
 
 from __future__ import annotations
 
+import math
+
+import coal
 import numpy as np
-import pinocchio as pin
 import shapely
 
-from synth.models.arm.hand import finger_placement
-from synth.models.spec import HandSpec, SurfaceShape
+from synth.models.spec import SurfaceShape
 from synth.strategies.context import PlanContext, end_from_hand
 from synth.strategies.landing import landing_region
-from synth.strategies.records import PinInHoleStrategy
+from synth.strategies.records import Grasp, PinInHoleStrategy
 
 __all__ = ["false_seat_problem", "hand_height_above_end"]
 
 
-def _box_corners(size: tuple[float, float, float], placement: pin.SE3) -> np.ndarray:
-    """The 8 corners (3 × 8) of a box of full sides ``size`` placed at ``placement``."""
-    half = 0.5 * np.asarray(size)
-    signs = np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1])).reshape(3, -1)
-    return placement.rotation @ (half[:, None] * signs) + placement.translation[:, None]
-
-
-def hand_height_above_end(hand: HandSpec, end_from_hand_: pin.SE3, opening: float) -> float:
+def hand_height_above_end(ctx: PlanContext, grasp: Grasp) -> float:
     """Height [m] of the hand's lowest point above the pin end, along the end's axis.
 
-    The hand of :func:`synth.models.arm.hand.hand_bodies`: two finger plates (thickness ×
-    2·pad radius × finger length + pad radius) at ``opening`` and the palm behind them, their
-    corners seen from the end frame (z out of the hole once inserted).
+    The end frame's z points out of the hole once inserted; the hand holds the pin by ``grasp``,
+    fingers closed on it. Coal's distance from each of the arm's hand bodies (the parametric
+    hand's plates and palm, or a URDF hand's own meshes) to the half-space z ≤ 0 of the end
+    frame: the height of the body's lowest point. For the parametric hand this is the closed
+    form ``d − r_pad (sin γ + |cos γ|)`` (its plates reach one pad radius past the pads' centre
+    along the approach and across it); a Panda's palm sits 1 cm higher than that form says.
     """
-    finger = (
-        hand.finger_thickness,
-        2 * hand.finger_pad_radius,
-        hand.finger_length + hand.finger_pad_radius,
-    )
-    palm = pin.SE3(np.eye(3), np.array([0.0, 0.0, -hand.finger_length - hand.palm_size[2] / 2]))
-    corners = [_box_corners(hand.palm_size, end_from_hand_ * palm)]
-    for side in (-1, 1):
-        placed = end_from_hand_ * finger_placement(hand, side, opening)  # type: ignore[arg-type]
-        corners.append(_box_corners(finger, placed))
-    return float(np.min(np.concatenate(corners, axis=1)[2]))
+    scene = ctx.gross.holding(grasp)
+    q = ctx.q_park  # the bodies' placements in the hand frame do not depend on the joints
+    hand = ctx.arm.forward(q)
+    end_hand = end_from_hand(ctx, grasp)
+    below = coal.Halfspace(np.array([0.0, 0.0, 1.0]), 0.0)
+    request, result = coal.DistanceRequest(), coal.DistanceResult()
+    lowest = math.inf
+    for body in scene.bodies:
+        if body.role != "hand":
+            continue
+        placed = end_hand * hand.actInv(scene.body_pose(q, body.name))
+        result.clear()
+        height = coal.distance(
+            body.geometry,
+            coal.Transform3s(placed.rotation, placed.translation),
+            below,
+            coal.Transform3s(),
+            request,
+            result,
+        )
+        lowest = min(lowest, float(height))
+    return lowest
 
 
 def _can_go_beside(ctx: PlanContext, strategy: PinInHoleStrategy) -> bool:
@@ -87,8 +99,7 @@ def false_seat_problem(ctx: PlanContext, strategy: PinInHoleStrategy) -> str | N
     footprint = strategy.errors
     if footprint is None or not _can_go_beside(ctx, strategy):
         return None
-    grasp = strategy.pickup.grasp
-    h = hand_height_above_end(ctx.hand, end_from_hand(ctx, grasp), ctx.pin_shape.diameter)
+    h = hand_height_above_end(ctx, strategy.pickup.grasp)
     dz = footprint.dz if strategy.tap is None else strategy.tap.dz_after
     d_f, threshold = ctx.insertion.d_f, strategy.success_threshold
     taper = ctx.pin_shape.tip_taper_length
@@ -103,7 +114,7 @@ def false_seat_problem(ctx: PlanContext, strategy: PinInHoleStrategy) -> str | N
             f"search reach past it) rests its taper on the edge with its end up to "
             f"{100 * taper:.3g} cm below the face, {window}"
         )
-    if abs(d_f - h) > threshold + dz:
+    if d_f + threshold + dz < h:
         return None
     return (
         f"a pin that goes down beside {ctx.hole_al}'s face (the footprint and search reach past "

@@ -182,6 +182,14 @@ def _fine_motions(
         made = plan_tap(ctx, cand, fp)
         if isinstance(made, Rejection):
             return made, False
+        if made.dz_after >= fp.dz:
+            # the tap's reading carries the hand's error at the tap as well as at the hole: a
+            # face whose height is known better than the hand places it gains nothing
+            return Rejection(
+                cand.name,
+                f"a tap would not narrow Δz: {_cm(made.dz_after)} after it against {_cm(fp.dz)} "
+                "without (the hand's own error at the tap)",
+            ), False
         tap = made
         dz = tap.dz_after
         if dz > z_limit:

@@ -23,7 +23,7 @@ import shapely
 
 from synth.models.spec import HoleShape
 from synth.strategies.beside import hand_height_above_end
-from synth.strategies.context import PlanContext, end_from_hand
+from synth.strategies.context import PlanContext
 from synth.strategies.landing import landing_region
 from synth.strategies.records import PinInHoleStrategy
 
@@ -49,8 +49,7 @@ def wrong_hole_problem(ctx: PlanContext, strategy: PinInHoleStrategy) -> str | N
     graph, surface = ctx.graph, ctx.hole_shape.surface
     occupied = _occupied(ctx)
     pin_shape = ctx.pin_shape
-    grasp = strategy.pickup.grasp
-    h = hand_height_above_end(ctx.hand, end_from_hand(ctx, grasp), pin_shape.diameter)
+    h = hand_height_above_end(ctx, strategy.pickup.grasp)
     dz = footprint.dz if strategy.tap is None else strategy.tap.dz_after
     d_f, threshold = ctx.insertion.d_f, strategy.success_threshold
     for name, node in graph.nodes.items():
