@@ -30,13 +30,13 @@ from synth.strategies.wrong_hole import wrong_hole_problem
 TWO_HOLES = DATA_TASKS / "two_holes_in_reach.yaml"
 
 
-def _deep(tmp_path: Path) -> Path:
-    """The task with BH2 and BH3 3.5 cm deep (the box is 4.9 cm tall)."""
+def _changed(tmp_path: Path, holes: tuple[str, ...], key: str, value: str) -> Path:
+    """The task with ``key`` of the named holes' shapes set to ``value``."""
     spec = yaml.safe_load(TWO_HOLES.read_text(encoding="utf-8"))
     for frame in spec["frames"]:
-        if frame["name"] in ("bh2", "bh3"):
-            frame["shape"]["depth"] = "3.5 cm"
-    path = tmp_path / "deep.yaml"
+        if frame["name"] in holes:
+            frame["shape"][key] = value
+    path = tmp_path / f"{key}.yaml"
     path.write_text(yaml.safe_dump(spec, sort_keys=False), encoding="utf-8")
     return path
 
@@ -57,7 +57,7 @@ def test_a_search_that_reaches_a_second_hole_as_deep_is_refused(monkeypatch, tmp
 
     # the same strategy where the other holes are deeper than the test's window: no problem,
     # and the replay lifts the pin out of BH2 and goes on to BH1
-    deep = load_task(_deep(tmp_path))
+    deep = load_task(_changed(tmp_path, ("bh2", "bh3"), "depth", "3.5 cm"))  # the box: 4.9 cm
     assert wrong_hole_problem(plan_context(spec), unchecked) is not None
     assert wrong_hole_problem(plan_context(deep), unchecked) is None
     context = replay_context(emit_program(unchecked, believed_graph(deep)), deep)
@@ -68,3 +68,19 @@ def test_a_search_that_reaches_a_second_hole_as_deep_is_refused(monkeypatch, tmp
     deepest = -min(p[2] for p in inside if math.hypot(p[0], p[1]) < 0.32e-2)
     # down BH2 until the hand lands on the face (h = 2.27 cm), past the window's 1.85 cm
     assert 1.85e-2 < deepest < 2.3e-2
+
+
+def test_a_second_hole_narrower_than_the_pin_is_no_safer(monkeypatch, tmp_path) -> None:
+    # BH2 at 0.55 cm, under the 0.604 cm pin: its 0.25 cm chamfer still catches the 0.161 cm tip
+    # (lead 0.275 + 0.25 − 0.161 = 0.364 cm), and in trial 14 the pin wedges there
+    narrow = load_task(_changed(tmp_path, ("bh2",), "diameter", "0.55 cm"))
+    with pytest.raises(SynthError) as refused:
+        plan_task(narrow)
+    first = str(refused.value).splitlines()[0]
+    assert "may find BH2 instead of BH1" in first and "the pin jams there" in first
+    monkeypatch.setattr("synth.strategies.refine.wrong_hole_problem", lambda *a, **k: None)
+    unchecked = plan_task(narrow).strategy
+    monkeypatch.undo()
+    context = replay_context(emit_program(unchecked, believed_graph(narrow)), narrow)
+    jammed = run_trial(context, 0, 14)
+    assert jammed.outcome == "violation" and "PIN1 wedged in BH2" in jammed.message

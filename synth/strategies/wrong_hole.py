@@ -11,7 +11,10 @@ lands first), DISTANCE_OFF = d_f − d_o + e with |e| ≤ Δz, and the program t
   beside the part (harmless);
 * reads neither, otherwise: it moves on to the next point with the pin in the hole, dragging it.
 
-So another open hole within reach is harmless only when it is deeper than ``d_f + t + Δz``. On
+So another open hole within reach is harmless only when it is deeper than ``d_f + t + Δz``. A
+hole narrower than the pin is no safer: its mouth catches the tip (the lead is the mouth's
+radius less the tip's) and the pin jams in it (a UR5 variant: PIN1, 0.748 cm, wedged in the
+0.64 cm BH3 in both of its first proof trials). On
 the seed's cell with the box known to ±0.6 in, ±0.4 in and ±10° and BH1 moved 3.5 cm from BH2
 (d_f = 1.64 cm, BH2 1.71 cm deep), 4 of 160 proof trials put PIN1 in BH2 and passed the test.
 Holes that hold another pin are not open; the pin's own start hole is, once the pin has left it.
@@ -56,12 +59,22 @@ def wrong_hole_problem(ctx: PlanContext, strategy: PinInHoleStrategy) -> str | N
         shape = node.shape
         if name == ctx.hole_frame or name in occupied or not isinstance(shape, HoleShape):
             continue
-        if shape.surface != surface or shape.diameter <= pin_shape.diameter:
+        if shape.surface != surface:
             continue
         lead = shape.diameter / 2 + shape.chamfer_width - pin_shape.tip_radius
         centre = graph.relative(surface, name).translation[:2]
-        if region.distance(shapely.Point(*centre)) >= lead:
+        if lead <= 0.0 or region.distance(shapely.Point(*centre)) >= lead:
             continue
+        reach = (
+            f"the search may find {node.al_name} instead of {ctx.hole_al}: the places the pin may "
+            f"come down at reach within {100 * lead:.3g} cm of its axis (its lead)"
+        )
+        if shape.diameter <= pin_shape.diameter:
+            return (
+                f"{reach}, and its mouth catches the tip of a pin it does not fit (a "
+                f"{100 * pin_shape.diameter:.3g} cm pin, a {100 * shape.diameter:.3g} cm hole): "
+                "the pin jams there"
+            )
         depth = min(shape.depth, h)
         if depth > d_f + threshold + dz:
             continue  # read as nothing felt: lifted out, the search goes on
@@ -71,9 +84,7 @@ def wrong_hole_problem(ctx: PlanContext, strategy: PinInHoleStrategy) -> str | N
             else "is read as neither a seat nor a miss: the next search move drags it"
         )
         return (
-            f"the search may find {node.al_name} instead of {ctx.hole_al}: the places the pin may "
-            f"come down at reach within {100 * lead:.3g} cm of its axis (its lead), and a pin "
-            f"{100 * depth:.3g} cm deep in it, against d_f = {100 * d_f:.3g} cm and the success "
-            f"test's {100 * threshold:.3g} cm (± Δz {100 * dz:.3g} cm), {read}"
+            f"{reach}, and a pin {100 * depth:.3g} cm deep in it, against d_f = {100 * d_f:.3g} cm "
+            f"and the success test's {100 * threshold:.3g} cm (± Δz {100 * dz:.3g} cm), {read}"
         )
     return None
