@@ -77,3 +77,27 @@ def test_a_finger_sweep_at_pickup_is_a_root_cause_trying_harder_may_help() -> No
     root = root_cause(rejections)
     assert (root.cause, root.count, root.of) == ("collision", 2, 3)
     assert root.helped_by_trying_harder  # keeping every ω may find one whose path is clear
+
+
+def test_a_proof_that_refuted_dr_ok_gives_way_to_the_candidates_planned_without_it() -> None:
+    # the stage order alone would name the proof (it got furthest); but its miss refuted the
+    # task's Δr_ok and every candidate was planned again at the lead, where the search is too
+    # long: that is why the task cannot be done (a random Panda variant of the seed cell)
+    too_long = (
+        "error footprint ±2.51 cm × ±2.36 cm: its search of 4021 points may take 1255 s with the "
+        "rest of the program, more than the 600 s of simulated time a replayed run may take"
+    )
+    rejections = [
+        Rejection("ω=0° γ=135° at the lead", too_long, stage="refine"),
+        Rejection("ω=0° γ=180° at the lead", too_long, stage="refine"),
+        Rejection(
+            "ω=0° γ=135°",
+            "replay proof failed: 2 of 4 trials succeeded",
+            stage="proof",
+            refuted="dr_ok",
+        ),
+    ]
+    root = root_cause(rejections)
+    assert (root.cause, root.stage, root.count, root.of) == ("footprint", "refine", 2, 2)
+    # a refuted proof with nothing planned after it is still the reason
+    assert root_cause(rejections[2:]).cause == "proof"

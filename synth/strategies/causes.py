@@ -6,7 +6,9 @@ the candidates that got furthest: the planning stages run pickup → approach �
 reason says more about the task than the many candidates that fell at the first hurdle. Among
 the rejections of the deepest stage the most frequent cause wins (ties: the first, which is the
 best-ranked candidate). ``pruned`` rejections (ω the seed's rating discarded, L2122) never name
-the root cause: they are a search limit, not a property of the task.
+the root cause: they are a search limit, not a property of the task. Nor do proofs that refuted
+the planner's belief (a trial that missed the hole, a Δr_ok wider than the parts' lead) where
+candidates were planned again without it: the re-planned candidates' reasons are the task's.
 """
 
 from __future__ import annotations
@@ -100,6 +102,11 @@ class RootCause:
 def root_cause(rejections: Sequence[Rejection]) -> RootCause:
     """The root cause of a refusal (see the module docstring)."""
     counted = [r for r in rejections if r.kind != "pruned"]
+    # A proof that refuted a belief (a miss: Δr_ok wider than the lead) was followed by
+    # candidates planned without it; theirs are the task's reasons, the refuted one is not.
+    unrefuted = [r for r in counted if r.refuted is None]
+    if unrefuted and len(unrefuted) < len(counted):
+        counted = unrefuted
     if not counted:
         example = rejections[0] if rejections else None
         return RootCause("other" if example is None else example.kind, None, 0, 0, example)
