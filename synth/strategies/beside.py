@@ -96,11 +96,10 @@ def false_seat_problem(ctx: PlanContext, strategy: PinInHoleStrategy) -> str | N
     does when d_f − t − Δz < L_t (the window of a miss on the face, d_f − Δz > t, with d_f less
     the taper).
     """
-    footprint = strategy.errors
-    if footprint is None or not _can_go_beside(ctx, strategy):
+    dz = strategy.dz_at_test
+    if dz is None or not _can_go_beside(ctx, strategy):
         return None
     h = hand_height_above_end(ctx, strategy.pickup.grasp)
-    dz = footprint.dz if strategy.tap is None else strategy.tap.dz_after
     d_f, threshold = ctx.insertion.d_f, strategy.success_threshold
     taper = ctx.pin_shape.tip_taper_length
     window = (

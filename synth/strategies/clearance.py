@@ -312,11 +312,7 @@ class GrossMotionCheck:
                 Obstacle(o.name, o.geometry, motion * o.pose) if o.name in names else o
                 for o in self.solids
             )
-            standing = Obstacle(
-                self.carried.name,
-                self.carried.geometry,
-                seated if turn is None else motion * seated,
-            )
+            standing = Obstacle(self.carried.name, self.carried.geometry, motion * seated)
             scene = CollisionScene(
                 self.arm,
                 (*solids, standing),

@@ -317,6 +317,16 @@ class PinInHoleStrategy:
         return self.gross_time - self.pickup.pickup_time
 
     @property
+    def dz_at_test(self) -> float | None:
+        """Δz [m] the success test is made with (``success_threshold`` = Δz/τ).
+
+        The footprint's, or the tap's once it has measured the face; None without a footprint.
+        """
+        if self.errors is None:
+            return None
+        return self.errors.dz if self.tap is None else self.tap.dz_after
+
+    @property
     def let_go_opening(self) -> float:
         """Opening [m] to let go of the pin (seed L2840: ``OPEN BHAND TO 2.98``).
 

@@ -46,14 +46,13 @@ def _occupied(ctx: PlanContext) -> set[str]:
 def wrong_hole_problem(ctx: PlanContext, strategy: PinInHoleStrategy) -> str | None:
     """Why the search may seat the pin in another hole of the face, or None (module docstring)."""
     region = landing_region(ctx, strategy)
-    footprint = strategy.errors
-    if region is None or footprint is None:
+    dz = strategy.dz_at_test
+    if region is None or dz is None:
         return None
     graph, surface = ctx.graph, ctx.hole_shape.surface
     occupied = _occupied(ctx)
     pin_shape = ctx.pin_shape
     h = hand_height_above_end(ctx, strategy.pickup.grasp)
-    dz = footprint.dz if strategy.tap is None else strategy.tap.dz_after
     d_f, threshold = ctx.insertion.d_f, strategy.success_threshold
     for name, node in graph.nodes.items():
         shape = node.shape
