@@ -28,6 +28,7 @@ from synth.replay.proof import (
     DEFAULT_MIN_SUCCESS,
     DEFAULT_PROOF_TRIALS,
     MIN_TRIALS_FOR_BOUND,
+    PASSING,
     Z_95,
     ProofOptions,
     _decide,
@@ -43,35 +44,47 @@ from synth.strategies.records import Rejection
 
 
 def _sequential(options: ProofOptions, outcomes: list[bool]) -> tuple[bool, int]:
-    """The proof's rule applied to ``outcomes``: (passed, trials consumed)."""
+    """The proof's rule applied to ``outcomes`` (two budgets long): (passed, trials consumed)."""
     successes = 0
     for n, ok in enumerate(outcomes, start=1):
         successes += ok
         decision = _decide(options, successes, n)
         if decision is not None:
-            return decision in ("budget", "wilson-lower"), n
-    raise AssertionError("the rule must decide by the budget")
+            return decision in PASSING, n
+    raise AssertionError("the rule must decide by the end of the confirmation")
 
 
 def _fixed(options: ProofOptions, outcomes: list[bool]) -> bool:
-    """The fixed-size test: the rate over the whole budget against min_success."""
-    return sum(outcomes) >= options.min_success * len(outcomes) - 1e-9
+    """The two-stage fixed-size test, written out: the rate over the budget n₀ against
+    min_success and, when those n₀ trials had a failure, the rate over 2n₀ as well."""
+    n0 = options.trials
+
+    def meets(trials: list[bool]) -> bool:
+        return sum(trials) >= options.min_success * len(trials) - 1e-9
+
+    first = outcomes[:n0]
+    if not meets(first):
+        return False
+    return all(first) or meets(outcomes[: 2 * n0])
 
 
-@pytest.mark.parametrize("budget, rate", [(10, 0.8), (12, 0.9), (14, 0.99), (16, 0.75)])
+@pytest.mark.parametrize("budget, rate", [(5, 0.8), (6, 0.75), (7, 0.7), (7, 0.99)])
 def test_sequential_test_agrees_with_the_fixed_size_test_on_every_pattern(budget, rate) -> None:
-    # Budgets below MIN_TRIALS_FOR_BOUND: only curtailment and the Wilson lower bound can stop
-    # early; both must give the verdict of the full budget, on every one of 2^budget patterns.
+    # Two budgets below MIN_TRIALS_FOR_BOUND: only curtailment and the Wilson lower bound can
+    # stop early; both must give the verdict of the two-stage test, on every one of 2^(2·budget)
+    # patterns (at 0.99 over 7 no failure is allowed, so no confirmation ever runs).
     options = ProofOptions(trials=budget, min_success=rate)
-    assert budget < MIN_TRIALS_FOR_BOUND
-    for pattern in itertools.product((True, False), repeat=budget):
+    assert 2 * budget < MIN_TRIALS_FOR_BOUND
+    for pattern in itertools.product((True, False), repeat=2 * budget):
         outcomes = list(pattern)
         passed, consumed = _sequential(options, outcomes)
-        if consumed < budget and passed:  # an early pass: the bound cleared the rate
+        if passed and consumed not in (budget, 2 * budget):  # early: the bound cleared the rate
             lo, _ = wilson_interval(sum(outcomes[:consumed]), consumed, Z_95)
             assert lo >= rate
         else:
             assert passed == _fixed(options, outcomes), (outcomes, consumed)
+        if passed and consumed == 2 * budget:  # a confirmation ran: the budget had a failure
+            assert not all(outcomes[:budget])
 
 
 def test_sequential_test_never_passes_what_the_full_budget_fails() -> None:
@@ -80,12 +93,32 @@ def test_sequential_test_never_passes_what_the_full_budget_fails() -> None:
     options = ProofOptions(trials=300, min_success=0.99)
     for p in (0.95, 0.98, 0.99, 0.995, 1.0):
         for _ in range(200):
-            outcomes = list(rng.random(300) < p)
+            outcomes = list(rng.random(600) < p)
             passed, consumed = _sequential(options, outcomes)
-            if passed and consumed == 300:
+            if passed and consumed in (300, 600):
                 assert _fixed(options, outcomes)
             if not _fixed(options, outcomes):
-                assert not passed or consumed < 300  # only an early Wilson-lower pass differs
+                assert not passed or consumed not in (300, 600)  # only a Wilson-lower pass
+
+
+def test_a_confirmation_rejects_more_often_than_the_one_stage_test() -> None:
+    # A program failing 3.5% of trials passes one budget of 100 at 0.99 with probability
+    # 0.965^100 + 100·0.035·0.965^99 = 0.131 (binomial, ≤ 1 failure); confirmed, it must also
+    # keep ≤ 2 failures over 200, which (≤ 1 in the second 100 after exactly 1 in the first)
+    # gives 0.965^100 + 100·0.035·0.965^99·0.131 = 0.042. Monte Carlo over 20 000 programs'
+    # proofs must find that, not the one-stage rate.
+    q = 0.965
+    one_failure = 100 * 0.035 * q**99
+    expected = q**100 + one_failure * (q**100 + one_failure)
+    assert expected == pytest.approx(0.0419, abs=5e-4)
+    options = ProofOptions()
+    rng = np.random.default_rng(11)
+    runs = 20_000
+    passes = 0
+    for _ in range(runs):
+        passes += _sequential(options, list(rng.random(200) >= 0.035))[0]
+    sigma = math.sqrt(expected * (1 - expected) / runs)
+    assert abs(passes / runs - expected) < 4 * sigma
 
 
 def test_wilson_lower_bound_of_a_clean_run_and_the_early_pass() -> None:
@@ -101,6 +134,11 @@ def test_wilson_lower_bound_of_a_clean_run_and_the_early_pass() -> None:
     default = ProofOptions()
     assert (default.trials, default.min_success, default.allowed_failures) == (100, 0.99, 1)
     assert _decide(default, 49, 50) is None and _decide(default, 49, 51) == "curtailed"
+    # A clean budget passes at once; one failure in it sends the proof to 2n = 200 trials,
+    # which allow two: a third failure ends the confirmation, two pass it.
+    assert _decide(default, 100, 100) == "budget" and _decide(default, 99, 100) is None
+    assert _decide(default, 148, 150) is None and _decide(default, 147, 150) == "curtailed"
+    assert _decide(default, 198, 200) == "confirmed" and _decide(default, 199, 200) == "confirmed"
 
 
 def test_cli_defaults_match_the_proof_module() -> None:

@@ -355,8 +355,10 @@ def iter_trials(
     count: int,
     pool: TrialPool | None = None,
     stop: threading.Event | None = None,
+    *,
+    start: int = 0,
 ) -> Generator[RunReport, None, None]:
-    """Trials 0 … count−1 of ``job`` in trial order (see the module docstring).
+    """Trials ``start`` … count−1 of ``job`` in trial order (see the module docstring).
 
     The trials are streamed: at most :func:`max_in_flight` chunks of ``_CHUNK`` trials are
     submitted ahead of the consumer, whatever ``count`` is (10⁸ trials start at once and hold
@@ -367,16 +369,16 @@ def iter_trials(
     :func:`deferred_interrupts`): once set, a ``KeyboardInterrupt`` is raised here, between
     trials or while waiting for one.
     """
-    if pool is None or pool.workers == 1 or count <= _CHUNK:
+    if pool is None or pool.workers == 1 or count - start <= _CHUNK:
         from synth.replay.run import run_trial
 
-        for i in range(count):
+        for i in range(start, count):
             if stop is not None and stop.is_set():
                 raise KeyboardInterrupt
             yield run_trial(context, seed, i)
         return
     executor = pool.executor()
-    starts = iter(range(0, count, _CHUNK))  # lazy: nothing is made per trial up front
+    starts = iter(range(start, count, _CHUNK))  # lazy: nothing is made per trial up front
     in_flight: deque[Future[list[RunReport]]] = deque()
     try:
         while True:
