@@ -29,7 +29,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Literal
+from typing import Literal, Protocol
 
 from synth.exceptions import SpecError
 from synth.models.graph import AttributeGraph
@@ -123,9 +123,21 @@ def derive(graph: AttributeGraph, spec: InsertionSpec) -> InsertionParameters:
     )
 
 
-def exceeds_lead(params: InsertionParameters) -> bool:
-    """Whether the Δr_ok planned with is wider than the parts' geometric lead."""
-    return params.dr_ok > params.lead + 1e-9
+class Led(Protocol):
+    """What was planned with a Δr_ok and the parts' lead: parameters, or a strategy."""
+
+    @property
+    def dr_ok(self) -> float:
+        """[m] the lateral error the search is spaced by."""
+
+    @property
+    def lead(self) -> float | None:
+        """[m] chamfer + hole radius − tip radius (None: not derived)."""
+
+
+def exceeds_lead(planned: Led) -> bool:
+    """Whether the Δr_ok planned with is wider than the parts' geometric lead (None: unknown)."""
+    return planned.lead is not None and planned.dr_ok > planned.lead + 1e-9
 
 
 def at_lead(params: InsertionParameters, why: str) -> InsertionParameters:

@@ -210,6 +210,7 @@ def plan_approach(ctx: PlanContext, pickup: Pickup) -> Candidate | Rejection:
         d_f=d_f,
         d_s=ctx.insertion.d_s,
         dr_ok=ctx.insertion.dr_ok,
+        lead=ctx.insertion.lead,
         success_threshold=opts.tau * (d_f - ctx.insertion.d_s),
         force_threshold=opts.force_threshold,
         gross_time=pickup.strategy.pickup_time + transport,

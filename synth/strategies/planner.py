@@ -89,7 +89,10 @@ def plan_task(
     ``accept`` is asked about the best refined strategy; when it rejects it, that candidate
     is dropped and best-first selection runs again over the rest (refinements are kept, so a
     candidate is refined at most once). The planner stays a pure function: what ``accept``
-    checks (the pipeline emits and proves the program) is not the planner's business.
+    checks (the pipeline emits and proves the program) is not the planner's business. A
+    rejection with ``refuted="dr_ok"`` (a trial missed: Δr_ok wider than the capture) sends
+    every candidate to be refined once more at the parts' lead; one marked ``proven`` (its
+    proof passed all the same) is kept, and chosen if nothing planned at the lead is accepted.
     ``q_start`` is the arm's first configuration (default: at the park frame).
     """
     start = time.perf_counter()
@@ -124,6 +127,7 @@ def plan_task(
     exhaustive = ctx.options.exhaustive
     remaining = list(candidates)
     refused: list[Rejection] = []  # by ``accept``, in the order it refused them
+    fallback: Refined | None = None  # proven, but with a miss that refuted Δr_ok
     accept_time = 0.0  # [s] spent in ``accept``: not planning time
     while True:
         selection = select_strategy(
@@ -142,9 +146,15 @@ def plan_task(
         accept_time += time.perf_counter() - checked
         if verdict is None:
             break
-        refused.append(_at_stage(verdict, "proof"))
+        replan = verdict.refuted == "dr_ok" and refining[0] is ctx and exceeds_lead(ctx.insertion)
+        if verdict.proven and not replan:
+            break  # nothing is planned without the refuted belief: the passed proof stands
+        if verdict.proven:
+            fallback = best
+        else:
+            refused.append(_at_stage(verdict, "proof"))
         remaining = [c for c in remaining if c is not best.candidate]
-        if verdict.refuted == "dr_ok" and refining[0] is ctx and exceeds_lead(ctx.insertion):
+        if replan:
             # A trial missed: the proof refuted the task's Δr_ok (measured on the seed's real
             # arm, L1963; the replay captures within the parts' lead). Every candidate is refined
             # once more with its search spaced, and its tilt bounded, by the lead.
@@ -159,6 +169,10 @@ def plan_task(
         _at_stage(r, "refine") for r in refinements.values() if isinstance(r, Rejection)
     )
     rejected.extend(refused)
+    if best is None and fallback is not None:
+        # Every candidate planned at the lead was refused (their reasons are in ``rejected``):
+        # the program proven with a miss is the best synth has, and its proof passed.
+        best = fallback
     if best is None:
         raise NoStrategyError(spec.name, tuple(rejected), root_cause(rejected))
     refined = [r for r in refinements.values() if isinstance(r, Refined)]
@@ -167,6 +181,8 @@ def plan_task(
         r.strategy for r in refined if r.strategy.name not in refused_names
     ]
     listed += [c.strategy for c in selection.unrefined]
+    if best is fallback:  # its refinement was dropped with the refuted Δr_ok's
+        listed.append(best.strategy)
     listed.sort(key=lambda s: (not s.refined, s.expected_time))
     return PlanResult(
         strategy=best.strategy,

@@ -300,6 +300,10 @@ class PinInHoleStrategy:
     bow: float = 0.0
     """[m] how far the approach through ``approach_vias`` bows off the hole axis (measured on
     the arm model, added to the footprint)."""
+    lead: float | None = None
+    """[m] the parts' geometric lead, chamfer + hole radius − tip radius: what the replay
+    captures within (:func:`synth.models.insertion.exceeds_lead` compares ``dr_ok`` with it);
+    None where it was not derived."""
 
     @property
     def expected_time(self) -> float:
@@ -419,6 +423,10 @@ class Rejection:
     refuted: str | None = None
     """The planner's belief a failed proof refuted: ``dr_ok`` when a trial missed the hole (its
     pin was not captured where Δr_ok said it would be), else None."""
+    proven: bool = False
+    """The proof passed, yet one of its trials refuted ``refuted``: the program is written only
+    if nothing planned without that belief is proven (:func:`~synth.strategies.planner.plan_task`
+    keeps it as the fallback)."""
 
     @property
     def kind(self) -> str:

@@ -251,6 +251,7 @@ def _fine_motions(
         tap=tap,
         search=search,
         fine_time=fine_time,
+        dr_ok=ins.dr_ok,  # the lead's, when refined at the lead
         success_threshold=dz / opts.tau,
         decisions=tuple(decisions),
     )
