@@ -119,6 +119,25 @@ class _Proven:
         """The written program's proof: the last one tried, the one that passed."""
         return self.attempts[-1].proof
 
+    @property
+    def fallback(self) -> str | None:
+        """Why the written program is a fallback, or None when it is the plan's first choice.
+
+        A fallback is a program whose proof passed with a trial that missed the hole by the
+        search's gaps (:func:`_missed_by_gaps`), written because everything planned again at
+        the parts' lead was refused: it may miss a little more often than its proof says.
+        """
+        written = self.attempts[-1]
+        if written.refuted != "dr_ok":
+            return None
+        failure = written.proof.first_failure
+        missed = "" if failure is None else f" (trial {failure.index} missed the hole)"
+        return (
+            f"{written.candidate} is written as the fallback: its proof passed{missed}, but "
+            "every plan at the parts' lead was refused (see Rejected); its search, spaced by "
+            "the task's Δr_ok, may leave gaps the hole can sit in"
+        )
+
 
 @dataclass(frozen=True, eq=False, kw_only=True)
 class Synthesis(_Proven):
@@ -142,6 +161,7 @@ class Synthesis(_Proven):
             **self.plan.to_json(),
             "program": self.program,
             "proof": self.proof.to_json(),
+            "fallback": self.fallback,
             "attempts": [a.to_json() for a in self.attempts],
         }
 
@@ -210,6 +230,7 @@ class SequenceSynthesis(_Proven):
             "steps": steps,
             "program": self.program,
             "proof": self.proof.to_json(),
+            "fallback": self.fallback,
         }
 
 

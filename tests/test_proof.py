@@ -328,6 +328,7 @@ def test_a_passed_proof_with_a_miss_replans_the_seed_at_the_lead() -> None:
     assert search is not None and search.step == pytest.approx(0.75 * 0.0044)
     assert synthesis.strategy.dr_ok == pytest.approx(0.0044)  # the header's DROK says so too
     assert "DROK = 0.44*CM" in synthesis.program
+    assert synthesis.fallback is None  # the program at the lead is the plan's first choice
     assert SEED_PROGRAM.read_text().count("DROK = 0.762*CM") == 1  # golden: the nominal proof
 
 
@@ -391,3 +392,8 @@ def test_a_sequence_proven_with_a_miss_is_kept_when_nothing_at_the_lead_is_plann
     failure = only.proof.first_failure
     assert failure is not None and failure.message.startswith("PIN1 MISSED BH1")
     assert all(AT_THE_LEAD not in s.strategy.name for s in synthesis.sequence.steps)
+    # the one line that tells the engineer the written program is a fallback, and why
+    assert synthesis.fallback is not None
+    assert synthesis.fallback.startswith(f"{only.candidate} is written as the fallback")
+    assert f"trial {failure.index} missed the hole" in synthesis.fallback
+    assert synthesis.to_json()["fallback"] == synthesis.fallback

@@ -81,6 +81,8 @@ def _cmd_plan(args: argparse.Namespace) -> int:
                 result.plan, result.proof, records=args.records, verbose=args.verbose
             )
         print(text, file=summary)
+        if result.fallback is not None:
+            print(f"\nWarning: {result.fallback}", file=summary)
         if args.output is not None and not to_stdout:
             print(f"AL program written to {args.output}", file=summary)
         if args.svg is not None:
