@@ -15,7 +15,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-import httpx
+import httpx2 as httpx
 from _paths import ROOT, SEED_TASK
 from _server_support import YAML, descendants, done, finished, is_running
 

@@ -10,7 +10,7 @@ import json
 from collections.abc import Iterator
 from pathlib import Path
 
-import httpx
+import httpx2 as httpx
 import pytest
 from _paths import SEED_TASK
 from _server_support import YAML, client_for, failed, overridden

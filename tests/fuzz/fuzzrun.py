@@ -362,7 +362,7 @@ def _job_result(http: Any, status: int, body: str, what: str, timeout: float) ->
 
 def fuzz_api(cases: int, timeout: float, out: Path, seed: int, budget: float) -> Tally:
     """The ``api`` surface (module docstring): half schemathesis, half mutated tasks."""
-    import httpx
+    import httpx2 as httpx
     import schemathesis
     from schemathesis import GenerationMode
 
