@@ -24,8 +24,8 @@ from synth.models.loader import load_task
 from synth.replay.run import replay_context, run_trial, trial_world
 from synth.replay.trace import record_run
 from synth.strategies import plan_task
-from synth.strategies.beside import hand_height_above_end
 from synth.strategies.context import end_from_hand, plan_context
+from synth.strategies.landing import hand_height_above_end
 from synth.units import INCH
 
 BESIDE = DATA_TASKS / "beside_the_box.yaml"

@@ -25,6 +25,7 @@ from synth.replay.run import replay_context, run_trial, trial_world
 from synth.replay.trace import record_run
 from synth.strategies import plan_task
 from synth.strategies.context import plan_context
+from synth.strategies.landing import landing
 from synth.strategies.wrong_hole import wrong_hole_problem
 
 TWO_HOLES = DATA_TASKS / "two_holes_in_reach.yaml"
@@ -58,8 +59,11 @@ def test_a_search_that_reaches_a_second_hole_as_deep_is_refused(monkeypatch, tmp
     # the same strategy where the other holes are deeper than the test's window: no problem,
     # and the replay lifts the pin out of BH2 and goes on to BH1
     deep = load_task(_changed(tmp_path, ("bh2", "bh3"), "depth", "3.5 cm"))  # the box: 4.9 cm
-    assert wrong_hole_problem(plan_context(spec), unchecked) is not None
-    assert wrong_hole_problem(plan_context(deep), unchecked) is None
+    for task, problem in ((spec, True), (deep, False)):
+        ctx = plan_context(task)
+        where = landing(ctx, unchecked)
+        assert where is not None
+        assert (wrong_hole_problem(ctx, where) is not None) is problem
     context = replay_context(emit_program(unchecked, believed_graph(deep)), deep)
     lifted = record_run(context, trial=14, seed=0)
     assert lifted.report.outcome == "success"

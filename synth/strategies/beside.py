@@ -29,64 +29,24 @@ on the outline (the face's own frame) and the attempts' footprint boxes
 
 from __future__ import annotations
 
-import math
-
-import coal
-import numpy as np
 import shapely
 
 from synth.models.spec import SurfaceShape
-from synth.strategies.context import PlanContext, end_from_hand
-from synth.strategies.landing import landing_region
-from synth.strategies.records import Grasp, PinInHoleStrategy
+from synth.strategies.context import PlanContext
+from synth.strategies.landing import Landing
 
-__all__ = ["false_seat_problem", "hand_height_above_end"]
-
-
-def hand_height_above_end(ctx: PlanContext, grasp: Grasp) -> float:
-    """Height [m] of the hand's lowest point above the pin end, along the end's axis.
-
-    The end frame's z points out of the hole once inserted; the hand holds the pin by ``grasp``,
-    fingers closed on it. Coal's distance from each of the arm's hand bodies (the parametric
-    hand's plates and palm, or a URDF hand's own meshes) to the half-space z ≤ 0 of the end
-    frame: the height of the body's lowest point. For the parametric hand this is the closed
-    form ``d − r_pad (sin γ + |cos γ|)`` (its plates reach one pad radius past the pads' centre
-    along the approach and across it); a Panda's palm sits 1 cm higher than that form says.
-    """
-    scene = ctx.gross.holding(grasp)
-    q = ctx.q_park  # the bodies' placements in the hand frame do not depend on the joints
-    hand = ctx.arm.forward(q)
-    end_hand = end_from_hand(ctx, grasp)
-    below = coal.Halfspace(np.array([0.0, 0.0, 1.0]), 0.0)
-    request, result = coal.DistanceRequest(), coal.DistanceResult()
-    lowest = math.inf
-    for body in scene.bodies:
-        if body.role != "hand":
-            continue
-        placed = end_hand * hand.actInv(scene.body_pose(q, body.name))
-        result.clear()
-        height = coal.distance(
-            body.geometry,
-            coal.Transform3s(placed.rotation, placed.translation),
-            below,
-            coal.Transform3s(),
-            request,
-            result,
-        )
-        lowest = min(lowest, float(height))
-    return lowest
+__all__ = ["false_seat_problem"]
 
 
-def _can_go_beside(ctx: PlanContext, strategy: PinInHoleStrategy) -> bool:
+def _can_go_beside(ctx: PlanContext, where: Landing) -> bool:
     """Whether some attempt may bring the pin down off the hole's face (module docstring)."""
     shape = ctx.graph.node(ctx.hole_shape.surface).shape
-    region = landing_region(ctx, strategy)
-    if region is None or not isinstance(shape, SurfaceShape):
+    if not isinstance(shape, SurfaceShape):
         return False
-    return not shapely.Polygon(shape.outline).covers(region)
+    return not shapely.Polygon(shape.outline).covers(where.region)
 
 
-def false_seat_problem(ctx: PlanContext, strategy: PinInHoleStrategy) -> str | None:
+def false_seat_problem(ctx: PlanContext, where: Landing) -> str | None:
     """Why a pin beside the part could pass the program's success test, or None.
 
     Two ways to stop off the face's edge (module docstring): the hand landing on the face, the
@@ -96,27 +56,24 @@ def false_seat_problem(ctx: PlanContext, strategy: PinInHoleStrategy) -> str | N
     does when d_f − t − Δz < L_t (the window of a miss on the face, d_f − Δz > t, with d_f less
     the taper).
     """
-    dz = strategy.dz_at_test
-    if dz is None or not _can_go_beside(ctx, strategy):
+    if not _can_go_beside(ctx, where):
         return None
-    h = hand_height_above_end(ctx, strategy.pickup.grasp)
-    d_f, threshold = ctx.insertion.d_f, strategy.success_threshold
-    taper = ctx.pin_shape.tip_taper_length
     window = (
-        f"within the success test's {100 * threshold:.3g} cm (± Δz {100 * dz:.3g} cm) of "
-        f"d_f = {100 * d_f:.3g} cm: a miss would pass for an insertion"
+        f"within {where.window()} of d_f = {100 * where.d_f:.3g} cm: a miss would pass for an "
+        "insertion"
     )
+    taper = ctx.pin_shape.tip_taper_length
     tapered = ctx.pin_shape.tip_radius < ctx.pin_shape.diameter / 2
-    if tapered and taper > 0.0 and d_f - threshold - dz < taper:
+    if tapered and taper > 0.0 and where.d_f - where.threshold - where.dz < taper:
         return (
             f"a pin that comes down just past {ctx.hole_al}'s face's edge (the footprint and "
             f"search reach past it) rests its taper on the edge with its end up to "
             f"{100 * taper:.3g} cm below the face, {window}"
         )
-    if d_f + threshold + dz < h:
+    if not where.felt(where.hand_height):
         return None
     return (
         f"a pin that goes down beside {ctx.hole_al}'s face (the footprint and search reach past "
-        f"its edge) stops when the hand lands on the face {100 * h:.2f} cm above the pin end, "
-        f"{window}"
+        f"its edge) stops when the hand lands on the face {100 * where.hand_height:.2f} cm above "
+        f"the pin end, {window}"
     )

@@ -5,21 +5,74 @@ it; the pin end truly comes down at the aim less the pin's error against the hol
 the footprint ±dx × ±dy turned by ζ (:class:`~synth.strategies.records.ErrorFootprint`). The
 places are those boxes, centred on each aim, in the face's own frame (its outline's), as a
 shapely geometry: :mod:`~synth.strategies.beside` asks whether they leave the outline,
-:mod:`~synth.strategies.wrong_hole` whether they reach another hole.
+:mod:`~synth.strategies.wrong_hole` whether they reach another hole. Both read a pin end that
+comes down there by the program's success test and by how far below the end the hand is
+(:func:`hand_height_above_end`): :class:`Landing` holds what they share, made once per strategy.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
+import coal
 import numpy as np
 import shapely
 
-from synth.strategies.context import PlanContext
+from synth.strategies.context import PlanContext, end_from_hand
 from synth.strategies.fine import search_offsets
-from synth.strategies.records import PinInHoleStrategy
+from synth.strategies.records import Grasp, PinInHoleStrategy
 
-__all__ = ["landing_region"]
+__all__ = ["Landing", "hand_height_above_end", "landing", "landing_region"]
+
+
+@dataclass(frozen=True)
+class Landing:
+    """Where a strategy's pin end may come down, and how the program reads where it stops.
+
+    ``region``: :func:`landing_region`; ``hand_height`` [m]: :func:`hand_height_above_end` at
+    the strategy's grasp; ``d_f`` [m] the believed seat's depth, ``threshold`` [m] the success
+    test's t and ``dz`` [m] the depth error at the test (:attr:`PinInHoleStrategy.dz_at_test`).
+    """
+
+    region: shapely.Geometry
+    hand_height: float
+    d_f: float
+    threshold: float
+    dz: float
+
+    def window(self) -> str:
+        """The success test's window in words, for a refusal."""
+        return f"the success test's {100 * self.threshold:.3g} cm (± Δz {100 * self.dz:.3g} cm)"
+
+    def passes(self, depth: float) -> bool:
+        """Whether some world reads a pin end ``depth`` [m] below the face as a seat.
+
+        DISTANCE_OFF = d_f − depth + e with |e| ≤ Δz passes |DISTANCE_OFF| ≤ t (seed L2736).
+        """
+        return abs(self.d_f - depth) <= self.threshold + self.dz
+
+    def felt(self, depth: float) -> bool:
+        """Whether some world does not read a pin end ``depth`` [m] down as nothing felt.
+
+        Nothing felt is DISTANCE_OFF < −t for every |e| ≤ Δz: depth > d_f + t + Δz.
+        """
+        return depth <= self.d_f + self.threshold + self.dz
+
+
+def landing(ctx: PlanContext, strategy: PinInHoleStrategy) -> Landing | None:
+    """The strategy's :class:`Landing`; None without a footprint or a success test."""
+    region = landing_region(ctx, strategy)
+    dz = strategy.dz_at_test
+    if region is None or dz is None:
+        return None
+    return Landing(
+        region,
+        hand_height_above_end(ctx, strategy.pickup.grasp),
+        ctx.insertion.d_f,
+        strategy.success_threshold,
+        dz,
+    )
 
 
 def landing_region(ctx: PlanContext, strategy: PinInHoleStrategy) -> shapely.Geometry | None:
@@ -44,3 +97,37 @@ def landing_region(ctx: PlanContext, strategy: PinInHoleStrategy) -> shapely.Geo
         corners = origin[:, None] + to_face @ (np.array([[x], [y]]) - box)
         places.append(shapely.Polygon(corners.T))
     return shapely.union_all(places)
+
+
+def hand_height_above_end(ctx: PlanContext, grasp: Grasp) -> float:
+    """Height [m] of the hand's lowest point above the pin end, along the end's axis.
+
+    The end frame's z points out of the hole once inserted; the hand holds the pin by ``grasp``,
+    fingers closed on it. Coal's distance from each of the arm's hand bodies (the parametric
+    hand's plates and palm, or a URDF hand's own meshes) to the half-space z ≤ 0 of the end
+    frame: the height of the body's lowest point. For the parametric hand this is the closed
+    form ``d − r_pad (sin γ + |cos γ|)`` (its plates reach one pad radius past the pads' centre
+    along the approach and across it); a Panda's palm sits 1 cm higher than that form says.
+    """
+    scene = ctx.gross.holding(grasp)
+    q = ctx.q_park  # the bodies' placements in the hand frame do not depend on the joints
+    hand = ctx.arm.forward(q)
+    end_hand = end_from_hand(ctx, grasp)
+    below = coal.Halfspace(np.array([0.0, 0.0, 1.0]), 0.0)
+    request, result = coal.DistanceRequest(), coal.DistanceResult()
+    lowest = math.inf
+    for body in scene.bodies:
+        if body.role != "hand":
+            continue
+        placed = end_hand * hand.actInv(scene.body_pose(q, body.name))
+        result.clear()
+        height = coal.distance(
+            body.geometry,
+            coal.Transform3s(placed.rotation, placed.translation),
+            below,
+            coal.Transform3s(),
+            request,
+            result,
+        )
+        lowest = min(lowest, float(height))
+    return lowest

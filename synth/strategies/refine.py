@@ -40,6 +40,7 @@ from synth.strategies.context import PlanContext
 from synth.strategies.fine import fine_motion_obstruction
 from synth.strategies.footprint import estimate_footprint, footprint_tables
 from synth.strategies.hypotheses import Accuracy, Tapped
+from synth.strategies.landing import landing
 from synth.strategies.records import ErrorFootprint, PinInHoleStrategy, Rejection
 from synth.strategies.relations import approach_relation, hole_only_relation
 from synth.strategies.search import (
@@ -258,12 +259,14 @@ def _fine_motions(
     obstructed = fine_motion_obstruction(ctx, cand, strategy)
     if obstructed is not None:
         return Rejection(cand.name, obstructed), False
-    false_seat = false_seat_problem(ctx, strategy)
-    if false_seat is not None:
-        return Rejection(cand.name, false_seat, cause="depth"), tap is None
-    wrong_hole = wrong_hole_problem(ctx, strategy)
-    if wrong_hole is not None:
-        return Rejection(cand.name, wrong_hole, cause="footprint"), tap is None
+    where = landing(ctx, strategy)
+    if where is not None:
+        false_seat = false_seat_problem(ctx, where)
+        if false_seat is not None:
+            return Rejection(cand.name, false_seat, cause="depth"), tap is None
+        wrong_hole = wrong_hole_problem(ctx, where)
+        if wrong_hole is not None:
+            return Rejection(cand.name, wrong_hole, cause="footprint"), tap is None
     return Refined(strategy, world, cand), False
 
 

@@ -25,10 +25,8 @@ from __future__ import annotations
 import shapely
 
 from synth.models.spec import HoleShape
-from synth.strategies.beside import hand_height_above_end
 from synth.strategies.context import PlanContext
-from synth.strategies.landing import landing_region
-from synth.strategies.records import PinInHoleStrategy
+from synth.strategies.landing import Landing
 
 __all__ = ["wrong_hole_problem"]
 
@@ -43,17 +41,11 @@ def _occupied(ctx: PlanContext) -> set[str]:
     }
 
 
-def wrong_hole_problem(ctx: PlanContext, strategy: PinInHoleStrategy) -> str | None:
+def wrong_hole_problem(ctx: PlanContext, where: Landing) -> str | None:
     """Why the search may seat the pin in another hole of the face, or None (module docstring)."""
-    region = landing_region(ctx, strategy)
-    dz = strategy.dz_at_test
-    if region is None or dz is None:
-        return None
     graph, surface = ctx.graph, ctx.hole_shape.surface
     occupied = _occupied(ctx)
     pin_shape = ctx.pin_shape
-    h = hand_height_above_end(ctx, strategy.pickup.grasp)
-    d_f, threshold = ctx.insertion.d_f, strategy.success_threshold
     for name, node in graph.nodes.items():
         shape = node.shape
         if name == ctx.hole_frame or name in occupied or not isinstance(shape, HoleShape):
@@ -62,7 +54,7 @@ def wrong_hole_problem(ctx: PlanContext, strategy: PinInHoleStrategy) -> str | N
             continue
         lead = shape.diameter / 2 + shape.chamfer_width - pin_shape.tip_radius
         centre = graph.relative(surface, name).translation[:2]
-        if lead <= 0.0 or region.distance(shapely.Point(*centre)) >= lead:
+        if lead <= 0.0 or where.region.distance(shapely.Point(*centre)) >= lead:
             continue
         reach = (
             f"the search may find {node.al_name} instead of {ctx.hole_al}: the places the pin may "
@@ -74,16 +66,16 @@ def wrong_hole_problem(ctx: PlanContext, strategy: PinInHoleStrategy) -> str | N
                 f"{100 * pin_shape.diameter:.3g} cm pin, a {100 * shape.diameter:.3g} cm hole): "
                 "the pin jams there"
             )
-        depth = min(shape.depth, h)
-        if depth > d_f + threshold + dz:
+        depth = min(shape.depth, where.hand_height)
+        if not where.felt(depth):
             continue  # read as nothing felt: lifted out, the search goes on
         read = (
             "passes the success test: the program would report the wrong insertion"
-            if abs(d_f - depth) <= threshold + dz
+            if where.passes(depth)
             else "is read as neither a seat nor a miss: the next search move drags it"
         )
         return (
-            f"{reach}, and a pin {100 * depth:.3g} cm deep in it, against d_f = {100 * d_f:.3g} cm "
-            f"and the success test's {100 * threshold:.3g} cm (± Δz {100 * dz:.3g} cm), {read}"
+            f"{reach}, and a pin {100 * depth:.3g} cm deep in it, against d_f = "
+            f"{100 * where.d_f:.3g} cm and {where.window()}, {read}"
         )
     return None
