@@ -20,7 +20,7 @@ from synth.models.arm import SweepOptions
 from synth.replay import machine_for, replay_context
 from synth.replay.advance import PairMotion, fast_sweep
 from synth.replay.bounds import ArmChain, PinExtent, PinFlight, safe_step
-from synth.replay.contact import GJK_MARGIN, _Pin, _Target, pin_points
+from synth.replay.contact import GJK_MARGIN, PinGeometry, Target, pin_points
 from synth.replay.motion import Segment
 from synth.replay.truth import HandErrors, nominal_world
 
@@ -182,11 +182,11 @@ def test_plane_and_witness_bounds_stay_below_coals_distances(cell) -> None:  # t
     # distance, and the separation along Coal's witness direction nearly equals it
     _, machine = cell
     state = next(iter(machine.pins.values()))
-    pin_ = _Pin(state.model)
+    pin_ = PinGeometry(state.model)
     points = pin_points(state.model)
     rng = np.random.default_rng(4)
     for obstacle in machine.workcell.obstacles:
-        target = _Target(obstacle)
+        target = Target(obstacle)
         assert target.normals is not None and target.offsets is not None
         hull_gaps = []
         witnessed = 0
@@ -216,7 +216,7 @@ def test_plane_and_witness_bounds_stay_below_coals_distances(cell) -> None:  # t
         assert witnessed > 100
 
 
-def _support(hull: coal.CollisionGeometry, target: _Target, direction: np.ndarray) -> float:
+def _support(hull: coal.CollisionGeometry, target: Target, direction: np.ndarray) -> float:
     """max over the obstacle of −direction·x, from its hull's points (a box: its corners)."""
     if isinstance(hull, coal.Box):
         half = np.asarray(hull.halfSide)

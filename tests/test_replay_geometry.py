@@ -21,7 +21,8 @@ from synth.models.loader import load_task
 from synth.models.meshes import block
 from synth.models.workcell import TABLE, WorkcellModel
 from synth.replay.capture import captures, seat_depth, tip_placement
-from synth.replay.contact import first_contact, guided_motion
+from synth.replay.contact import first_contact
+from synth.replay.guided import guided_motion
 from synth.replay.truth import HandErrors, link_error, nominal_world, sample_world
 from synth.units import CM, INCH
 

@@ -1,4 +1,4 @@
-"""What a held pin touches along a motion: conservative advancement with Coal, and hole guidance.
+"""What a held pin first touches along a motion: conservative advancement with Coal.
 
 **Free flight** (:func:`first_contact`). The pin's true pose along one motion segment is a
 function P(s), s ∈ [0, 1]. A pin at distance d from every obstacle, whose points move at most
@@ -33,17 +33,13 @@ the step. A crossing of a mouth plane is found at the step points as on the refe
 step that could dip the tip below a mouth and back (inside the mouth's reach) is shortened
 until the tip's height is either provably positive or provably falling over the whole step.
 
-**Guided** (:func:`guided_motion`). A pin in a hole's bore follows the hole's axis: the hole
-takes the pin's lateral error and its tilt, the arm complies. Along the commanded path its tip
-depth is the commanded tip's depth along the axis. The guided phase ends when the pin bottoms
-at its seated depth (force rises), when its tip leaves the mouth (``exit_margin`` above it), or
-when the commanded path drags it more than ``compliance`` sideways (the pin jams).
+The guided phase that follows a capture is :mod:`synth.replay.guided`'s; a slide along a
+surface, :mod:`synth.replay.scrape`'s.
 """
 
 from __future__ import annotations
 
-import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
 
@@ -57,28 +53,18 @@ from synth.models.spec import DEFAULT_FRICTION
 from synth.models.workcell import HoleSite, PinModel
 from synth.replay.bounds import PinFlight, safe_step
 from synth.replay.capture import TipPlacement, captures, seat_depth, tip_placement
+from synth.replay.guided import BISECTIONS, event_crossing
+from synth.replay.motion import PoseAt
 from synth.replay.wedging import wedges
 from synth.vec3 import cross3
 
-__all__ = [
-    "GuidedEnd",
-    "PinContact",
-    "ScrapeEnd",
-    "first_contact",
-    "guided_motion",
-    "pin_points",
-    "scrape",
-]
-
-PoseAt = Callable[[float], pin.SE3]
-"""s ∈ [0, 1] ↦ the pin's true world pose [m]."""
+__all__ = ["GJK_MARGIN", "PinContact", "PinGeometry", "Target", "first_contact", "pin_points"]
 
 _NEAR = 3e-3
 """[m] below this convex-hull distance the exact mesh distance is computed."""
 _FAR = 0.05
 """[m] beyond this bounding-sphere distance the sphere bound is used."""
 _MAX_STEPS = 20_000
-_BISECTIONS = 40
 
 
 @dataclass(frozen=True, eq=False)
@@ -187,7 +173,7 @@ def _solid(geometry: coal.CollisionGeometry) -> _Solid:
     return solid
 
 
-class _Target:
+class Target:
     """One obstacle with its bounding sphere and convex hull, ready for distance queries."""
 
     def __init__(self, obstacle: Obstacle) -> None:
@@ -229,7 +215,9 @@ class _Mouths:
         return axial, np.sqrt(np.einsum("ij,ij->i", radial, radial))
 
 
-class _Pin:
+class PinGeometry:
+    """The pin's convex solid with its bounding ball, ready for Coal distance queries."""
+
     def __init__(self, model: PinModel) -> None:
         self.model = model
         model.geometry.computeLocalAABB()
@@ -240,7 +228,7 @@ class _Pin:
         self.result = coal.DistanceResult()
 
     def distance(
-        self, pose: pin.SE3, target: _Target, exact: bool
+        self, pose: pin.SE3, target: Target, exact: bool
     ) -> tuple[float, NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """Distance [m], Coal's normal (pin → obstacle), nearest points on obstacle and pin."""
         geometry = target.obstacle.geometry if exact else target.hull
@@ -255,7 +243,7 @@ class _Pin:
         return float(d), normal, point, on_pin
 
     def separation(
-        self, pose: pin.SE3, target: _Target, exact: bool
+        self, pose: pin.SE3, target: Target, exact: bool
     ) -> tuple[float, NDArray[np.float64]]:
         """Distance [m] and Coal's normal (pin → obstacle), no witness points copied out."""
         geometry = target.obstacle.geometry if exact else target.hull
@@ -266,7 +254,7 @@ class _Pin:
         )
         return float(d), np.asarray(self.result.normal, dtype=float)
 
-    def gap(self, pose: pin.SE3, target: _Target, exact: bool) -> float:
+    def gap(self, pose: pin.SE3, target: Target, exact: bool) -> float:
         """The distance [m] of :meth:`distance` alone (no witness points copied out)."""
         geometry = target.obstacle.geometry if exact else target.hull
         self.result.clear()
@@ -278,7 +266,7 @@ class _Pin:
         )
 
 
-def _bound(pin_: _Pin, pose: pin.SE3, target: _Target) -> tuple[float, bool]:
+def _bound(pin_: PinGeometry, pose: pin.SE3, target: Target) -> tuple[float, bool]:
     """A lower bound on the distance and whether it is exact enough to stop on."""
     centre = pose.act(pin_.centre)
     sphere = float(np.linalg.norm(centre - target.centre)) - pin_.radius - target.radius
@@ -305,7 +293,7 @@ class _Field:
     array, ``owner`` the target of each and ``starts`` where each target's planes begin.
     """
 
-    def __init__(self, pin_: _Pin, targets: Sequence[_Target], points: NDArray[np.float64]):
+    def __init__(self, pin_: PinGeometry, targets: Sequence[Target], points: NDArray[np.float64]):
         self.pin = pin_
         self.points = points
         self.count = len(targets)
@@ -374,7 +362,7 @@ _PREPARED: dict[tuple[object, ...], tuple[object, ...]] = {}
 
 def _prepared(
     pin_model: PinModel, obstacles: Sequence[Obstacle], holes: Sequence[HoleSite]
-) -> tuple[_Pin, list[_Target], _Field, _Mouths, NDArray[np.float64]]:
+) -> tuple[PinGeometry, list[Target], _Field, _Mouths, NDArray[np.float64]]:
     """The pin, targets, bounds and mouths of a search, kept for the next ones.
 
     A trial's searches look for the same pin among the same solids at the same poses (a free
@@ -389,8 +377,8 @@ def _prepared(
     cached = _PREPARED.get(key)
     if cached is not None and cached[0] is pin_model and cached[1] is holes:
         return cached[2]  # type: ignore[return-value]
-    pin_ = _Pin(pin_model)
-    targets = [_Target(o) for o in obstacles]
+    pin_ = PinGeometry(pin_model)
+    targets = [Target(o) for o in obstacles]
     field = _Field(pin_, targets, pin_points(pin_model))
     mouths = _Mouths(holes)
     radii = np.array([h.mouth_radius for h in holes])
@@ -577,14 +565,14 @@ def _mouth_guard(
 
 
 def _crossing_flight(hole: HoleSite, flight: PinFlight, lo: float, hi: float) -> float:
-    """The s in [lo, hi] where the tip crosses the mouth plane (:func:`_event_crossing`).
+    """The s in [lo, hi] where the tip crosses the mouth plane (:func:`event_crossing`).
 
     The tip's height above the mouth is > 0 at ``lo`` and ≤ 0 at ``hi``; the bracket ends as
     narrow as the reference path's 40 bisections (:func:`_crossing`) make it.
     """
     origin = hole.world_from_hole.translation
     axis = hole.axis
-    return _event_crossing(lambda s: float(axis @ (flight.tip(s) - origin)), lo, hi)
+    return event_crossing(lambda s: float(axis @ (flight.tip(s) - origin)), lo, hi)
 
 
 def first_contact(
@@ -615,8 +603,8 @@ def first_contact(
         return _first_contact_flight(
             pin_model, flight, obstacles, holes, start, end, clearance, friction
         )
-    pin_ = _Pin(pin_model)
-    targets = [_Target(o) for o in obstacles]
+    pin_ = PinGeometry(pin_model)
+    targets = [Target(o) for o in obstacles]
     s = start
     pose = pose_at(s)
     limits = [clearance] * len(targets)
@@ -660,7 +648,7 @@ def first_contact(
 
 def _crossing(hole: HoleSite, pose_at: PoseAt, lo: float, hi: float) -> float:
     """The s in [lo, hi] where the tip crosses the mouth plane (bisection on the axial height)."""
-    for _ in range(_BISECTIONS):
+    for _ in range(BISECTIONS):
         mid = 0.5 * (lo + hi)
         if tip_placement(hole, pose_at(mid)).axial > 0.0:
             lo = mid
@@ -686,10 +674,10 @@ def _entry(
 
 
 def _classify(
-    pin_: _Pin,
+    pin_: PinGeometry,
     pose: pin.SE3,
     s: float,
-    target: _Target,
+    target: Target,
     holes: Sequence[HoleSite],
     friction: float | None = None,
 ) -> PinContact:
@@ -710,247 +698,3 @@ def _classify(
     if not (np.all(np.isfinite(point)) and np.all(np.isfinite(local))):
         point, local = pose.translation.copy(), np.zeros(3)  # degenerate: use the tip
     return PinContact(s, "surface", name, None, outward, point, local, d)
-
-
-@dataclass(frozen=True)
-class GuidedEnd:
-    """How a guided phase ends: at ``s``, by ``kind``, with the tip ``depth`` [m] there."""
-
-    s: float
-    kind: Literal["bottom", "exit", "jam", "end"]
-    depth: float
-    lateral: float
-
-
-def guided_motion(
-    hole: HoleSite,
-    pose_at: PoseAt,
-    *,
-    seat: float,
-    start: float = 0.0,
-    end: float = 1.0,
-    compliance: float = 0.01,
-    exit_margin: float = 1e-3,
-    seated_within: float = 1e-4,
-    samples: int = 64,
-    flight: PinFlight | None = None,
-) -> GuidedEnd:
-    """The end of a pin's guided phase in ``hole`` over s ∈ [start, end] (module docstring).
-
-    ``pose_at`` is the *commanded* pin pose (where the arm would carry it without the hole);
-    ``seat`` [m] is the depth at which the pin bottoms, and a pin starting within
-    ``seated_within`` [m] of it is seated (:func:`_bottom`). The commanded path is sampled at
-    ``samples`` points and the first event is located by bisection.
-
-    With a ``flight`` (the same commanded path with its motion bounds) the same first sample
-    is found evaluating fewer: the tip's depth and its distance from the axis are 1-Lipschitz
-    in its position, so the event margin m = min(seat − depth, compliance − lateral, depth +
-    exit margin) moves no faster than the tip, by at most h·V(s) + ½Ah² from a sample at s;
-    samples that close cannot hold an event and are passed over. The event between the last
-    sample without one and the first with one is then located on m (Illinois), to the
-    reference's bisection width.
-    """
-    if flight is not None:
-        return _guided_flight(
-            hole, flight, seat, start, end, compliance, exit_margin, seated_within, samples
-        )
-
-    def state(s: float) -> tuple[float, float]:
-        p = tip_placement(hole, pose_at(s))
-        return -p.axial, p.lateral
-
-    depth0, _ = state(start)
-    bottom = _bottom(depth0, seat, compliance, seated_within)
-
-    def event(s: float) -> Literal["bottom", "exit", "jam"] | None:
-        return _guided_event(*state(s), bottom, compliance, exit_margin)
-
-    previous = start
-    for s in np.linspace(start, end, max(samples, 2))[1:]:
-        if event(float(s)) is None:
-            previous = float(s)
-            continue
-        lo, hi = previous, float(s)
-        for _ in range(_BISECTIONS):
-            mid = 0.5 * (lo + hi)
-            if event(mid) is None:
-                lo = mid
-            else:
-                hi = mid
-        kind = event(hi)
-        assert kind is not None
-        depth, lateral = state(hi)
-        return GuidedEnd(hi, kind, min(max(depth, 0.0), seat), lateral)
-    depth, lateral = state(end)
-    return GuidedEnd(end, "end", min(max(depth, 0.0), seat), lateral)
-
-
-def _bottom(depth0: float, seat: float, compliance: float, seated_within: float) -> float:
-    """The commanded depth [m] at which a guided pin starting ``depth0`` deep stalls.
-
-    A pin above its ``seat`` stalls on reaching it. A pin already seated (within
-    ``seated_within`` of the seat: a stop leaves it there up to rounding) stalls only when the
-    path pushes it in by more than the arm's give, ``compliance``, the same give that bounds a
-    sideways drag (:func:`_guided_event`). A joint-interpolated move bows, and a seated pin
-    dragged sideways stalled on the bow's first nanometre downwards and was never seen to jam:
-    a 4 cm drag of the pin seated in the rack passed as a stall at the bottom.
-    """
-    if depth0 < seat - seated_within:
-        return seat
-    return max(depth0, seat) + compliance
-
-
-def _guided_event(
-    depth: float, lateral: float, bottom: float, compliance: float, exit_margin: float
-) -> Literal["bottom", "exit", "jam"] | None:
-    """What ends a guided phase with the tip ``depth`` [m] in and ``lateral`` [m] off the axis.
-
-    It bottoms at ``bottom``, jams past ``compliance`` sideways, leaves ``exit_margin`` above
-    the mouth; None while none holds.
-    """
-    if depth >= bottom:
-        return "bottom"
-    if lateral > compliance:
-        return "jam"
-    if depth <= -exit_margin:
-        return "exit"
-    return None
-
-
-def _guided_flight(
-    hole: HoleSite,
-    flight: PinFlight,
-    seat: float,
-    start: float,
-    end: float,
-    compliance: float,
-    exit_margin: float,
-    seated_within: float,
-    samples: int,
-) -> GuidedEnd:
-    """:func:`guided_motion` along a :class:`~synth.replay.bounds.PinFlight` (its docstring)."""
-    origin, axis = hole.world_from_hole.translation, hole.axis
-
-    def state(tip: NDArray[np.float64]) -> tuple[float, float]:
-        offset = tip - origin
-        along = float(axis @ offset)
-        radial = offset - along * axis
-        return -along, math.sqrt(float(radial @ radial))
-
-    def kind(depth: float, lateral: float) -> Literal["bottom", "exit", "jam"] | None:
-        return _guided_event(depth, lateral, bottom, compliance, exit_margin)
-
-    def margin(depth: float, lateral: float) -> float:
-        return min(bottom - depth, compliance - lateral, depth + exit_margin)
-
-    flight.at(start)
-    depth0, lateral0 = state(flight.translation)
-    bottom = _bottom(depth0, seat, compliance, seated_within)
-    known_s, known_margin, known_speed = start, margin(depth0, lateral0), flight.speed
-    curvature = flight.curvature
-    previous = start
-    for s in np.linspace(start, end, max(samples, 2))[1:].tolist():
-        tau = s - known_s
-        if known_margin > tau * known_speed + 0.5 * curvature * tau * tau:
-            previous = s  # proven without an event
-            continue
-        flight.at(s)
-        depth, lateral = state(flight.translation)
-        event = kind(depth, lateral)
-        if event is None:
-            previous = s
-            known_s, known_margin, known_speed = s, margin(depth, lateral), flight.speed
-            continue
-        hi = _event_crossing(lambda x: margin(*state(flight.tip(x))), previous, s)
-        depth, lateral = state(flight.tip(hi))
-        event = kind(depth, lateral)
-        if event is None:  # on the margin's zero exactly: step onto the event side
-            hi = s
-            depth, lateral = state(flight.tip(hi))
-            event = kind(depth, lateral)
-        assert event is not None
-        return GuidedEnd(hi, event, min(max(depth, 0.0), seat), lateral)
-    depth, lateral = state(flight.tip(end))
-    return GuidedEnd(end, "end", min(max(depth, 0.0), seat), lateral)
-
-
-def _event_crossing(f: Callable[[float], float], lo: float, hi: float) -> float:
-    """Where f falls from > 0 at ``lo`` to ≤ 0 at ``hi`` (Illinois; ``hi`` side returned).
-
-    The bracket ends as narrow as :data:`_BISECTIONS` bisections would make it.
-    """
-    tolerance = (hi - lo) * 2.0**-_BISECTIONS
-    f_lo, f_hi = f(lo), f(hi)
-    if f_lo <= 0.0:
-        return lo
-    side = 0
-    for _ in range(4 * _BISECTIONS):
-        if hi - lo <= tolerance or f_hi == 0.0:
-            break
-        mid = hi - f_hi * (hi - lo) / (f_hi - f_lo) if f_lo != f_hi else 0.5 * (lo + hi)
-        if not lo < mid < hi:
-            mid = 0.5 * (lo + hi)
-        f_mid = f(mid)
-        if f_mid > 0.0:
-            lo, f_lo = mid, f_mid
-            if side == -1:
-                f_hi *= 0.5
-            side = -1
-        else:
-            hi, f_hi = mid, f_mid
-            if side == 1:
-                f_lo *= 0.5
-            side = 1
-    return hi
-
-
-@dataclass(frozen=True)
-class ScrapeEnd:
-    """How a slide ends: at ``s``, ``free``, ``jam`` or at the path's ``end``.
-
-    ``free``: the path clears the obstacle; ``jam``: the arm would have to yield more than the
-    compliance; ``deflection`` [m]: how far it yields there.
-    """
-
-    s: float
-    kind: Literal["free", "jam", "end"]
-    deflection: float
-
-
-def scrape(
-    pin_model: PinModel,
-    pose_at: PoseAt,
-    speed: float,
-    obstacle: Obstacle,
-    normal: NDArray[np.float64],
-    pin_point: NDArray[np.float64],
-    origin: NDArray[np.float64],
-    *,
-    start: float,
-    end: float = 1.0,
-    compliance: float = 0.01,
-    clearance: float = 2e-5,
-    step: float = 2e-4,
-) -> ScrapeEnd:
-    """Follow a pin sliding along ``obstacle`` from ``start`` until its path clears it.
-
-    A pin pushed along a surface at a shallow angle slides: the arm yields along the surface
-    normal n by the depth the commanded pin would reach into the obstacle, measured at the
-    pin's contact point x (``pin_point``, pin frame) from where it touched (``origin``, world):
-    δ(s) = −n·(P(s)x − x₀). The slide ends where the commanded pin no longer touches the
-    obstacle (``free``), or jams where δ exceeds ``compliance`` [m]. The path is marched in
-    steps that move the pin at most ``step`` [m].
-    """
-    pin_ = _Pin(pin_model)
-    target = _Target(obstacle)
-    ds = step / speed if speed > 0.0 else 1.0
-    s = start
-    while s < end:
-        s = min(end, s + ds)
-        pose = pose_at(s)
-        deflection = -float(normal @ (pose.act(pin_point) - origin))
-        if deflection > compliance:
-            return ScrapeEnd(s, "jam", deflection)
-        if pin_.distance(pose, target, exact=True)[0] > clearance:
-            return ScrapeEnd(s, "free", max(deflection, 0.0))
-    return ScrapeEnd(end, "end", 0.0)

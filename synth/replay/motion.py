@@ -25,6 +25,9 @@ from synth.models.arm import Obstacle
 from synth.models.workcell import HoleSite
 from synth.replay.report import Violation
 
+PoseAt = Callable[[float], pin.SE3]
+"""s ∈ [0, 1] ↦ the pin's true world pose [m]."""
+
 __all__ = [
     "Motion",
     "MotionObserver",

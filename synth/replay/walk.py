@@ -8,10 +8,10 @@ the pin is stopped, if it is (:class:`~synth.replay.motion.Stop`):
 * *free*: :func:`~synth.replay.contact.first_contact` finds the first contact. A capture by a
   hole starts a guided phase; a wedge is a ``wedged`` violation; a grazing push (less than
   ``slide_angle`` into the surface) starts a slide; any other contact stops the pin there;
-* *guided* by a hole (:func:`~synth.replay.contact.guided_motion`): until it bottoms (a stop
+* *guided* by a hole (:func:`~synth.replay.guided.guided_motion`): until it bottoms (a stop
   at the seat), leaves the mouth (free again) or is dragged sideways past the compliance (a
   ``collision`` violation: jammed);
-* *sliding* (:func:`~synth.replay.contact.scrape`): until the path clears the surface (free
+* *sliding* (:func:`~synth.replay.scrape.scrape`): until the path clears the surface (free
   again) or the arm would have to yield more than the compliance (a stop: jammed).
 
 :func:`pin_speed` bounds how fast any point of the pin moves along a segment: the constant
@@ -36,9 +36,11 @@ from synth.models.workcell import HoleSite, Workcell
 from synth.replay.bounds import ArmChain, PinExtent, PinFlight
 from synth.replay.capture import seat_depth, seated_pose, tip_placement
 from synth.replay.cell import PinState, ReplayOptions
-from synth.replay.contact import PoseAt, first_contact, guided_motion, pin_points, scrape
-from synth.replay.motion import Phase, Segment, Slide, Stop, point_on, push_reaction
+from synth.replay.contact import first_contact, pin_points
+from synth.replay.guided import guided_motion
+from synth.replay.motion import Phase, PoseAt, Segment, Slide, Stop, point_on, push_reaction
 from synth.replay.report import Violation
+from synth.replay.scrape import scrape
 from synth.replay.wedging import wedging_onset
 
 __all__ = ["Walk", "WalkContext", "commanded_pose", "pin_speed", "walk_segment"]
