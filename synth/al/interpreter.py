@@ -1,8 +1,9 @@
 """Run a parsed AL program against a :class:`~synth.al.machine.Machine`.
 
 The interpreter owns the program's beliefs: its variables, their block scopes and the
-affixment graph. It learns about the world only through the machine (where the hand really
-is, what it senses, the finger opening, the clock). It never looks at a true world itself.
+affixment graph (kept consistent by :mod:`synth.al.frames`). It learns about the world only
+through the machine (where the hand really is, what it senses, the finger opening, the clock).
+It never looks at a true world itself.
 Each statement and expression node type has one method, dispatched by node type. Each method
 visits its children explicitly, because loops, branches and monitors decide what runs and when
 (the ``lark.visitors.Interpreter`` style, applied to the dataclass AST of
@@ -96,18 +97,30 @@ program raises :class:`~synth.exceptions.ALRuntimeError` with the AL line and co
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import math
 import time
 import weakref
 from collections.abc import Callable, Generator, Iterator, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, cast
 
 import numpy as np
 import pinocchio as pin
 
 from synth.al import ast
+from synth.al.frames import (
+    Affixment,
+    FrameError,
+    Scope,
+    Variable,
+    affix,
+    propagate,
+    se3_of,
+    set_pose,
+    unlink,
+)
 from synth.al.machine import (
     DurationConstraint,
     DurationMonitor,
@@ -134,7 +147,6 @@ from synth.al.values import (
     Exponents,
     OperandError,
     Pose,
-    PoseKind,
     Scalar,
     Value,
     Vector,
@@ -220,16 +232,6 @@ class RunResult:
         return self.abort is None
 
 
-@dataclass(frozen=True, eq=False)
-class Affixment:
-    """A link of the affixment graph: ``child = parent * parent_from_child`` [m]."""
-
-    child: str
-    parent: str
-    parent_from_child: pin.SE3
-    rigid: bool
-
-
 class _Aborted(Exception):
     """Internal: unwinds the interpreter after ``ABORT``; :meth:`Interpreter.run` catches it."""
 
@@ -239,46 +241,7 @@ class _Aborted(Exception):
 
 
 # --------------------------------------------------------------------------------------------
-# Variables, scopes, affixment links
-
-
-@dataclass(eq=False)
-class _Link:
-    parent: _Variable
-    parent_from_child: pin.SE3
-    rigid: bool
-
-
-@dataclass(eq=False)
-class _Variable:
-    name: str
-    type: str
-    value: Value | None = None
-    hand: bool = False
-    bound: bool = False
-    """Defined by the world binding and not yet declared by the program itself."""
-    link: _Link | None = None
-    children: list[_Variable] = field(default_factory=list)
-
-    @property
-    def pose(self) -> Pose | None:
-        return self.value if isinstance(self.value, Pose) else None
-
-
-class _Scope:
-    def __init__(self, parent: _Scope | None, name: str) -> None:
-        self.parent = parent
-        self.name = name
-        self.variables: dict[str, _Variable] = {}
-
-    def lookup(self, name: str) -> _Variable | None:
-        scope: _Scope | None = self
-        while scope is not None:
-            found = scope.variables.get(name)
-            if found is not None:
-                return found
-            scope = scope.parent
-        return None
+# A process's state
 
 
 @dataclass
@@ -293,13 +256,8 @@ class _MotionState:
 class _Context:
     """What a process carries: its innermost scope, and the motion whose handler it runs."""
 
-    scope: _Scope
+    scope: Scope
     motion: _MotionState | None = None
-
-
-def _se3_of(value: Pose | None) -> pin.SE3:
-    assert value is not None
-    return value.se3
 
 
 # --------------------------------------------------------------------------------------------
@@ -333,8 +291,8 @@ class Interpreter:
         for name in self.hand_names:
             if name in CONSTANTS or name in KEYWORDS:
                 raise ValueError(f"{name} is predeclared in AL and cannot name the hand")
-        self._global = _Scope(None, "<global>")
-        self._hand = _Variable(self.hand_names[0], "FRAME", hand=True)
+        self._global = Scope(None, "<global>")
+        self._hand = Variable(self.hand_names[0], "FRAME", hand=True)
         for name in self.hand_names:
             self._global.variables[name] = self._hand
         self._filename = "<al>"
@@ -353,9 +311,10 @@ class Interpreter:
         self._check_declarable(upper, None)
         if upper in self._global.variables:
             raise ValueError(f"{upper} is already bound")
-        variable = _Variable(upper, kind, bound=True)
+        variable = Variable(upper, kind, bound=True)
         self._global.variables[upper] = variable
-        self._set_pose(variable, pose, None)
+        with self._refused_at(None):
+            set_pose(variable, pose)
 
     def affix(
         self, child: str, parent: str, parent_from_child: pin.SE3 | None = None, *, rigid: bool
@@ -364,7 +323,8 @@ class Interpreter:
         c, p = self._global.lookup(child.upper()), self._global.lookup(parent.upper())
         if c is None or p is None:
             raise ValueError(f"affix {child} to {parent}: both must be bound first")
-        self._affix(c, p, parent_from_child, rigid, None)
+        with self._refused_at(None):
+            affix(c, p, parent_from_child, rigid)
 
     def value(self, name: str) -> Value | None:
         """The value of global ``name`` (None if it has none); constants too."""
@@ -442,7 +402,7 @@ class Interpreter:
     # ---- statements
 
     def _sequence(
-        self, body: Sequence[ast.Stmt], cx: _Context, *, declare_in: _Scope | None = None
+        self, body: Sequence[ast.Stmt], cx: _Context, *, declare_in: Scope | None = None
     ) -> Generator[None, None, None]:
         if declare_in is not None:
             for statement in body:
@@ -474,7 +434,7 @@ class Interpreter:
         yield from method(self, statement, cx)
 
     def _block(self, s: ast.Block, cx: _Context) -> Iterator[None]:
-        scope = _Scope(cx.scope, s.name or "<block>")
+        scope = Scope(cx.scope, s.name or "<block>")
         try:
             yield from self._sequence(s.body, _Context(scope, cx.motion), declare_in=scope)
         finally:
@@ -507,7 +467,7 @@ class Interpreter:
     def _declaration(self, s: ast.Declaration, cx: _Context) -> Iterator[None]:
         return iter(())  # made when the block was entered
 
-    def _declare(self, s: ast.Declaration, scope: _Scope) -> None:
+    def _declare(self, s: ast.Declaration, scope: Scope) -> None:
         for name in s.names:
             self._check_declarable(name.name, name)
             existing = scope.variables.get(name.name)
@@ -522,7 +482,7 @@ class Interpreter:
                 continue
             if existing is not None:
                 raise self._error(name, f"{name.name} is declared twice in this block")
-            variable = _Variable(name.name, s.type)
+            variable = Variable(name.name, s.type)
             if s.type == "EVENT":
                 variable.value = Event(name.name)
             scope.variables[name.name] = variable
@@ -533,12 +493,12 @@ class Interpreter:
         if name in CONSTANTS or name in KEYWORDS:
             raise self._error(node, f"{name} is predeclared in AL and cannot be redefined")
 
-    def _release(self, scope: _Scope) -> None:
+    def _release(self, scope: Scope) -> None:
         for variable in scope.variables.values():
             if variable.link is not None:
-                self._unlink(variable)
+                unlink(variable)
             for child in list(variable.children):
-                self._unlink(child)
+                unlink(child)
 
     def _assign(self, s: ast.Assign, cx: _Context) -> Iterator[None]:
         self._store(s.target, self._eval(s.value, cx), cx)
@@ -620,108 +580,42 @@ class Interpreter:
             if not isinstance(value, Pose):
                 raise self._error(s.at, f"AFFIX ... AT needs a trans, not {type_name(value)}")
             relation = value.se3
-        self._affix(child, parent, relation, s.rigid, s)
+        with self._refused_at(s):
+            affix(child, parent, relation, s.rigid)
         return iter(())
 
     def _unfix(self, s: ast.Unfix, cx: _Context) -> Iterator[None]:
         a = self._frame_variable(s.frame, cx)
         b = self._frame_variable(s.parent, cx)
         if a.link is not None and a.link.parent is b:
-            self._unlink(a)
+            unlink(a)
         elif b.link is not None and b.link.parent is a:
-            self._unlink(b)
+            unlink(b)
         else:
             raise self._error(s, f"{a.name} is not affixed to {b.name}")
         return iter(())
 
-    def _frame_variable(self, name: ast.Name, cx: _Context) -> _Variable:
+    def _frame_variable(self, name: ast.Name, cx: _Context) -> Variable:
         variable = cx.scope.lookup(name.name)
         if variable is None:
             self._check_declarable(name.name, name)
-            variable = _Variable(name.name, "FRAME")
+            variable = Variable(name.name, "FRAME")
             self._global.variables[name.name] = variable
         if variable.type not in ("FRAME", "TRANS"):
             raise self._error(name, f"{name.name} is a {variable.type.lower()}, not a frame")
         return variable
 
-    def _affix(
-        self,
-        child: _Variable,
-        parent: _Variable,
-        relation: pin.SE3 | None,
-        rigid: bool,
-        node: ast.Node | None,
-    ) -> None:
-        if child.hand:
-            raise self._error(
-                node,
-                f"the hand {child.name} cannot be affixed to {parent.name}: its position is "
-                f"sensed (write AFFIX {parent.name} TO {child.name})",
-            )
-        ancestor: _Variable | None = parent
-        while ancestor is not None:
-            if ancestor is child:
-                raise self._error(node, f"affixing {child.name} to {parent.name} makes a cycle")
-            ancestor = ancestor.link.parent if ancestor.link is not None else None
-        if relation is None:
-            if child.pose is None or parent.pose is None:
-                missing = child.name if child.pose is None else parent.name
-                raise self._error(
-                    node, f"AFFIX without AT needs both values, and {missing} has none"
-                )
-            relation = _se3_of(parent.pose).inverse() * _se3_of(child.pose)
-        if child.link is not None:
-            self._unlink(child)
-        child.link = _Link(parent, pin.SE3(relation), rigid)
-        parent.children.append(child)
-        if parent.pose is not None:
-            child.value = Pose(_se3_of(parent.pose) * relation, _kind(child))
-            self._propagate(child, frozenset())
-
-    def _unlink(self, child: _Variable) -> None:
-        link = child.link
-        if link is None:
-            return
-        link.parent.children.remove(child)
-        child.link = None
-
-    def _set_pose(self, variable: _Variable, pose: pin.SE3, node: ast.Node | None) -> None:
-        """Assign a frame and update the affixment graph (module docstring, "Affixment")."""
-        chain = [(variable, pin.SE3(pose))]
-        top, top_pose = variable, chain[0][1]
-        while top.link is not None and top.link.rigid:
-            parent = top.link.parent
-            if parent.hand:
-                raise self._error(
-                    node,
-                    f"cannot assign {variable.name}: it is rigidly affixed to the hand "
-                    f"{parent.name}, whose position is sensed",
-                )
-            top_pose = top_pose * top.link.parent_from_child.inverse()
-            top = parent
-            chain.append((top, top_pose))
-        for v, p in chain:
-            v.value = Pose(p, _kind(v))
-        if top.link is not None and top.link.parent.pose is not None:
-            top.link.parent_from_child = _se3_of(top.link.parent.pose).inverse() * top_pose
-        self._propagate(top, frozenset(id(v) for v, _ in chain))
-
-    def _propagate(self, root: _Variable, fixed: frozenset[int]) -> None:
-        stack = [root]
-        while stack:
-            node = stack.pop()
-            if node.pose is None:
-                continue
-            for child in node.children:
-                assert child.link is not None
-                if id(child) not in fixed:
-                    se3 = _se3_of(node.pose) * child.link.parent_from_child
-                    child.value = Pose(se3, _kind(child))
-                stack.append(child)
+    @contextlib.contextmanager
+    def _refused_at(self, node: ast.Node | None) -> Iterator[None]:
+        """A change of the affixment graph that it refuses is an error at ``node``."""
+        try:
+            yield
+        except FrameError as refused:
+            raise self._error(node, str(refused)) from None
 
     def _sync_hand(self, pose: pin.SE3) -> None:
         self._hand.value = Pose(pose, "frame")
-        self._propagate(self._hand, frozenset())
+        propagate(self._hand, frozenset())
 
     # ---- motion statements
 
@@ -751,10 +645,10 @@ class Interpreter:
             arrivals,
         )
 
-    def _hand_from(self, moved: _Variable, s: ast.Move) -> pin.SE3:
+    def _hand_from(self, moved: Variable, s: ast.Move) -> pin.SE3:
         if moved.hand:
             return pin.SE3.Identity()
-        node: _Variable | None = moved
+        node: Variable | None = moved
         while node is not None and not node.hand:
             node = node.link.parent if node.link is not None else None
         if node is None:
@@ -765,7 +659,7 @@ class Interpreter:
             )
         if moved.pose is None:
             raise self._error(s.frame, f"{moved.name} has no value")
-        return _se3_of(self._hand.pose).inverse() * _se3_of(moved.pose)
+        return se3_of(self._hand.pose).inverse() * se3_of(moved.pose)
 
     def _device(self, name: ast.Name) -> None:
         if name.name not in self.hand_names:
@@ -1036,7 +930,7 @@ class Interpreter:
         variable = cx.scope.lookup(name.name)
         if variable is None:
             self._check_declarable(name.name, name)
-            variable = _Variable(name.name, "EVENT", Event(name.name))
+            variable = Variable(name.name, "EVENT", Event(name.name))
             self._global.variables[name.name] = variable
         if not isinstance(variable.value, Event):
             raise self._error(name, f"{name.name} is a {variable.type.lower()}, not an event")
@@ -1051,7 +945,7 @@ class Interpreter:
             kind = _type_of(value)
             if kind == "EVENT":
                 raise self._error(target, "an event cannot be assigned")
-            variable = _Variable(target.name, kind)
+            variable = Variable(target.name, kind)
             self._global.variables[target.name] = variable
         if variable.hand:
             raise self._error(
@@ -1063,7 +957,8 @@ class Interpreter:
                 raise self._error(
                     target, f"cannot assign {type_name(value)} to {wanted.lower()} {target.name}"
                 )
-            self._set_pose(variable, value.se3, target)
+            with self._refused_at(target):
+                set_pose(variable, value.se3)
             return
         if _type_of(value) != wanted:
             raise self._error(
@@ -1074,10 +969,6 @@ class Interpreter:
 
 # --------------------------------------------------------------------------------------------
 # Helpers and dispatch tables
-
-
-def _kind(variable: _Variable) -> PoseKind:
-    return "trans" if variable.type == "TRANS" else "frame"
 
 
 def _type_of(value: Value) -> str:
