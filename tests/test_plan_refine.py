@@ -244,3 +244,48 @@ def test_axial_limit_keeps_a_miss_apart_from_a_seated_pin() -> None:
     # then reads ≥ 1.2 − 0.727 = 0.473 cm, inside the threshold 0.727/0.75 = 0.969 cm.
     assert 0.00727 < 0.75 * 0.012 and 0.012 - 0.00727 < 0.00727 / 0.75
     assert axial_limit(0.75, 0.012, 0.0) < 0.00727
+    # With the arm's reading floor f the threshold is at least Δz + f: at the limit L of a
+    # shallow hole, L + f equals the miss's shortest reading d_f − d_s − L (the closed form);
+    # for the seed's 1.71 cm the floor does not bind.
+    floor = 0.01 * INCH
+    for span in (0.0012, 0.0015):
+        limit = axial_limit(0.75, span, 0.0, floor)
+        assert limit + floor == pytest.approx(span - limit, rel=1e-12)
+        assert limit < axial_limit(0.75, span, 0.0)
+    assert axial_limit(0.75, 0.0171, 0.0, floor) == axial_limit(0.75, 0.0171, 0.0)
+
+
+def test_the_success_threshold_keeps_the_arms_reading_above_an_exact_depth() -> None:
+    # t = max(Δz/τ, Δz + f), f = 0.01 in, the arm's reading (seed L3385, L3697). The seed's
+    # thresholds are Δz/τ (L2738: .127/.75 = .169 cm); below Δz = f·τ/(1 − τ) = 0.0762 cm the
+    # floor holds t a reading above Δz, and with Δz = 0 (a cell known exactly) t = f, where
+    # Δz/τ = 0 made a test nothing passes (the code generator refused the task).
+    from synth.strategies.refine import success_threshold
+
+    floor = 0.01 * INCH
+    assert success_threshold(0.00127, 0.75, floor) == pytest.approx(0.00127 / 0.75)
+    assert success_threshold(0.0, 0.75, floor) == floor
+    knee = floor * 0.75 / 0.25
+    assert success_threshold(knee, 0.75, floor) == pytest.approx(knee / 0.75)
+    assert success_threshold(0.5 * knee, 0.75, floor) == pytest.approx(0.5 * knee + floor)
+
+
+def test_a_cell_known_exactly_is_planned_and_proven(tmp_path) -> None:
+    # The seed's cell with every error block removed (the box's place, the hand's error): Δz
+    # is 0 and the plan is the plainest one, no tap and no search; its test is the reading
+    # floor, 0.0254 cm, and the program passes its proof.
+    import yaml
+    from _tasks import synthesized
+
+    spec = yaml.safe_load(SEED_TASK.read_text(encoding="utf-8"))
+    for frame in spec["frames"]:
+        frame.pop("uncertainty", None)
+    spec["manipulator"].pop("hand_error")
+    exact = tmp_path / "exact.yaml"
+    exact.write_text(yaml.safe_dump(spec, sort_keys=False), encoding="utf-8")
+    synthesis = synthesized(exact, trials=20)
+    strategy = synthesis.strategy
+    assert strategy.tap is None and strategy.search is None
+    assert strategy.errors is not None and strategy.errors.dz == pytest.approx(0.0, abs=1e-9)
+    assert strategy.success_threshold == pytest.approx(0.01 * INCH)
+    assert synthesis.proof.passed and synthesis.proof.successes == synthesis.proof.trials

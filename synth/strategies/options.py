@@ -60,6 +60,11 @@ class PlanOptions:
     "8*DZ" at L2735)."""
     tau: float = 0.75
     """τ [1]: |Δz| ≤ τ·(d_f − d_s) is needed to tell an insertion from a miss (L2289)."""
+    reading_floor: float = 0.01 * INCH
+    """[m] the least margin of the success test over Δz: the arm's reading is given in 0.01 in
+    (seed L3385, L3697), so a test within that of the seated reading may reject a seated pin.
+    The threshold is max(Δz/τ, Δz + this) (:func:`~synth.strategies.refine.success_threshold`):
+    Δz/τ alone is 0 in a cell known exactly, a test nothing passes."""
     tap_ring_min: float = 0.3 * INCH
     """[m] Δr_td = max(0.3 in, Δx, Δy): ring spacing of the tapping-place search (L2304)."""
     tap_travel: float = 2 * INCH

@@ -322,7 +322,7 @@ class PinInHoleStrategy:
 
     @property
     def dz_at_test(self) -> float | None:
-        """Δz [m] the success test is made with (``success_threshold`` = Δz/τ).
+        """Δz [m] the success test is made with (see :func:`~.refine.success_threshold`).
 
         The footprint's, or the tap's once it has measured the face; None without a footprint.
         """

@@ -18,7 +18,8 @@ For one basic strategy, in its own world:
    workcell (:mod:`synth.strategies.fine`);
 7. ``fine_time`` = tap time + search time; the success test's threshold is ``Δz/τ`` with the
    tap-corrected Δz (the programs of §4.8 test ``|DISTANCE_OFF| > .169`` = .127/.75, L2738,
-   and ``> .239`` ≈ .180/.75, L2836).
+   and ``> .239`` ≈ .180/.75, L2836), and at least Δz plus the arm's reading resolution
+   (:func:`success_threshold`).
 
 :func:`minimum_refinement_cost` is the lower bound on fine-motion time of L2459/L2476.
 """
@@ -71,19 +72,35 @@ def _deg(x: float) -> str:
     return f"{x / DEG:.3f}°"
 
 
-def axial_limit(tau: float, d_f: float, d_s: float) -> float:
-    """Largest Δz [m] the success test can live with: τ·(d_f − d_s)/(1 + τ).
+def success_threshold(dz: float, tau: float, floor: float) -> float:
+    """The success test's threshold t [m] for a depth error ``dz``: max(Δz/τ, Δz + floor).
 
-    The programs test ``|DISTANCE_OFF| > Δz/τ`` against the seated position (L2738). A seated
-    pin reads at most Δz; a pin that missed stops on the same surface, shifted by the same
-    height error, and reads at least (d_f − d_s) − Δz. The two are told apart only when
-    Δz/τ < (d_f − d_s) − Δz, i.e. Δz < τ·(d_f − d_s)/(1 + τ). The seed's rule (L2289,
-    |Δz| ≤ τ·(d_f − d_s)) leaves out the miss's own shift: on the generality task
-    tap_and_search (Δz 0.727 cm, d_f − d_s 1.2 cm, within the seed's 0.90 cm) 19 % of trials
-    read a pin resting on the plate as seated. The seed's own figures pass either rule
-    (seed_4_8: Δz 0.18 cm against 0.73 cm).
+    The seed's programs test ``|DISTANCE_OFF| > Δz/τ`` (L2738: .169 = .127/.75; L2836: .239 ≈
+    .180/.75). A seated pin reads within Δz of 0, so t must exceed Δz by at least the arm's
+    reading resolution, ``floor`` (:attr:`~synth.strategies.options.PlanOptions.reading_floor`);
+    Δz/τ does for Δz ≥ floor·τ/(1 − τ) (0.076 cm at τ = 0.75), the floor below that. The seed's
+    figures are above it: their thresholds are Δz/τ.
     """
-    return tau * (d_f - d_s) / (1.0 + tau)
+    return max(dz / tau, dz + floor)
+
+
+def axial_limit(tau: float, d_f: float, d_s: float, floor: float = 0.0) -> float:
+    """Largest Δz [m] the success test can live with: τ·(d_f − d_s)/(1 + τ), or less by ``floor``.
+
+    That is min(τ·(d_f − d_s)/(1 + τ), (d_f − d_s − floor)/2).
+
+    The programs test ``|DISTANCE_OFF| > t`` against the seated position (L2738), t =
+    :func:`success_threshold`. A seated pin reads at most Δz; a pin that missed stops on the
+    same surface, shifted by the same height error, and reads at least (d_f − d_s) − Δz. The
+    two are told apart only when t < (d_f − d_s) − Δz: with t = Δz/τ, Δz < τ·(d_f − d_s)/(1 +
+    τ); with t = Δz + floor, Δz < (d_f − d_s − floor)/2 (binding only for d_f − d_s below
+    floor·(1 + τ)/(1 − τ), 0.18 cm at the defaults). The seed's rule (L2289, |Δz| ≤ τ·(d_f −
+    d_s)) leaves out the miss's own shift: on the generality task tap_and_search (Δz 0.727 cm,
+    d_f − d_s 1.2 cm, within the seed's 0.90 cm) 19 % of trials read a pin resting on the plate
+    as seated. The seed's own figures pass either rule (seed_4_8: Δz 0.18 cm against 0.73 cm).
+    """
+    span = d_f - d_s
+    return min(tau * span / (1.0 + tau), (span - floor) / 2.0)
 
 
 def hole_tilt_problem(ctx: PlanContext) -> Rejection | None:
@@ -137,11 +154,15 @@ def refine(ctx: PlanContext, cand: Candidate) -> Refined | Rejection:
             f"Δz = {_cm(fp.dz)} ≥ dtry − d_f = {_cm(cand.strategy.dtry - ins.d_f)}: the "
             "guarded move could arrive without a force (seed L2186)",
         )
-    z_limit = axial_limit(opts.tau, ins.d_f, ins.d_s)
+    z_limit = axial_limit(opts.tau, ins.d_f, ins.d_s, opts.reading_floor)
+    if z_limit < opts.tau * (ins.d_f - ins.d_s) / (1.0 + opts.tau):
+        z_words = f"(d_f − d_s − {_cm(opts.reading_floor)} arm reading)/2 = {_cm(z_limit)}"
+    else:
+        z_words = f"τ·(d_f − d_s)/(1 + τ) = {_cm(z_limit)}"
     world = cand.world.with_facts(
         Accuracy(ctx.pin_al, ctx.hole_al, fp.dx, fp.dy, fp.dz, fp.zeta, fp.dtheta)
     )
-    made, beside = _fine_motions(ctx, cand, fp, world, decisions, z_limit, None)
+    made, beside = _fine_motions(ctx, cand, fp, world, decisions, (z_limit, z_words), None)
     if not beside:
         return made
     # a miss beside the face, or a pin in another hole, would pass the success test: a tap
@@ -153,7 +174,7 @@ def refine(ctx: PlanContext, cand: Candidate) -> Refined | Rejection:
         else f"a pin in another hole than {ctx.hole_al}"
     )
     why = f"without one, Δz = {_cm(fp.dz)} lets {where} pass the success test"
-    tapped, _ = _fine_motions(ctx, cand, fp, world, decisions, z_limit, why)
+    tapped, _ = _fine_motions(ctx, cand, fp, world, decisions, (z_limit, z_words), why)
     if isinstance(tapped, Refined):
         return tapped
     return dataclasses.replace(made, reason=f"{made.reason}; with a tap: {tapped.reason}")
@@ -165,17 +186,19 @@ def _fine_motions(
     fp: ErrorFootprint,
     world: World,
     decisions: list[str],
-    z_limit: float,
+    axial: tuple[float, str],
     tap_reason: str | None,
 ) -> tuple[Refined | Rejection, bool]:
     """The tap and search of §4.5.2–4.5.3, and the checks of the fine motions they make.
 
-    A tap when Δz exceeds ``z_limit``, or when ``tap_reason`` asks for one. Returns the refined
-    strategy or the rejection, and whether the rejection is one a tap may lift, in a strategy
-    without one: a false seat beside the face (:mod:`~synth.strategies.beside`) or in another
-    hole (:mod:`~synth.strategies.wrong_hole`).
+    A tap when Δz exceeds the ``axial`` limit (:func:`axial_limit`, and its formula in words),
+    or when ``tap_reason`` asks for one. Returns the refined strategy or the rejection, and
+    whether the rejection is one a tap may lift, in a strategy without one: a false seat beside
+    the face (:mod:`~synth.strategies.beside`) or in another hole
+    (:mod:`~synth.strategies.wrong_hole`).
     """
     opts, ins = ctx.options, ctx.insertion
+    z_limit, z_words = axial
     decisions = list(decisions)
     tap = None
     dz = fp.dz
@@ -196,15 +219,10 @@ def _fine_motions(
         if dz > z_limit:
             rejection = Rejection(
                 cand.name,
-                f"even after tapping, Δz = {_cm(dz)} exceeds τ·(d_f − d_s)/(1 + τ) = "
-                f"{_cm(z_limit)}",
+                f"even after tapping, Δz = {_cm(dz)} exceeds {z_words}",
             )
             return rejection, False
-        because = (
-            f"Δz = {_cm(fp.dz)} exceeds τ·(d_f − d_s)/(1 + τ) = {_cm(z_limit)}"
-            if tap_reason is None
-            else tap_reason
-        )
+        because = f"Δz = {_cm(fp.dz)} exceeds {z_words}" if tap_reason is None else tap_reason
         decisions.append(
             f"tap: {because}; tapping place "
             f"({100 * tap.offset[0]:.2f}, {100 * tap.offset[1]:.2f}) cm from {ctx.hole_al} on "
@@ -214,8 +232,7 @@ def _fine_motions(
         world = world.with_facts(Tapped(tap.surface, tap.offset))
     else:
         decisions.append(
-            f"no tap: Δz = {_cm(fp.dz)} ≤ τ·(d_f − d_s)/(1 + τ) = {_cm(z_limit)}, small enough to "
-            "tell an insertion from a miss"
+            f"no tap: Δz = {_cm(fp.dz)} ≤ {z_words}, small enough to tell an insertion from a miss"
         )
     search = None
     if fp.dr > ins.dr_ok:
@@ -253,7 +270,7 @@ def _fine_motions(
         search=search,
         fine_time=fine_time,
         dr_ok=ins.dr_ok,  # the lead's, when refined at the lead
-        success_threshold=dz / opts.tau,
+        success_threshold=success_threshold(dz, opts.tau, opts.reading_floor),
         decisions=tuple(decisions),
     )
     obstructed = fine_motion_obstruction(ctx, cand, strategy)
