@@ -260,22 +260,6 @@ class IdealMachine(TimelineMachine["_Motion"]):
         """The hand pose [m] (a copy)."""
         return pin.SE3(self._hand)
 
-    def opening(self) -> float:
-        """The finger opening [m]."""
-        return self._opening
-
-    def force(self, direction: NDArray[np.float64]) -> float:
-        """Sensed force along ``direction`` [N]: zero unless a contact ended the last motion."""
-        return float(self._force @ np.asarray(direction, dtype=float))
-
-    def torque(self, axis: NDArray[np.float64]) -> float:
-        """Sensed torque [N·m]: always zero here (contact forces act at the hand)."""
-        return float(self._torque @ np.asarray(axis, dtype=float))
-
-    def time(self) -> float:
-        """The clock [s]."""
-        return self._time
-
     # ---- override point
 
     def contact(

@@ -312,19 +312,43 @@ M = TypeVar("M", bound=Timeline)
 class TimelineMachine(MotionGate, Generic[M]):
     """Plays :class:`Timeline` s of type ``M``: the event loop, resume and stop.
 
-    See the module docstring. Subclasses keep ``_time`` [s], ``_force`` [N] and ``_torque``
-    [N·m] and implement :meth:`hand_pose` and the hooks ``_show``, ``_settle``; ``_violated``,
-    ``_stopped`` and ``_ended`` default to raising, nothing and nothing.
+    See the module docstring. Subclasses keep ``_time`` [s], ``_opening`` [m], ``_force`` [N]
+    and ``_torque`` [N·m], which the sensors read, and implement :meth:`hand_pose` and the hooks
+    ``_show``, ``_settle``; ``_violated``, ``_stopped`` and ``_ended`` default to raising,
+    nothing and nothing.
     """
 
     _motion: M | None = None  # type: ignore[assignment]
     _time: float
+    _opening: float
     _force: NDArray[np.float64]
     _torque: NDArray[np.float64]
+
+    # ---- sensors
 
     def hand_pose(self) -> pin.SE3:  # pragma: no cover - every machine has its own
         """The sensed hand pose [m]."""
         raise NotImplementedError
+
+    def opening(self) -> float:
+        """The finger opening [m]."""
+        return self._opening
+
+    def force(self, direction: NDArray[np.float64]) -> float:
+        """Sensed force along world ``direction`` [N].
+
+        The contact's reaction on the hand (and the pin it holds) where a contact ended or
+        paused the last motion; zero otherwise.
+        """
+        return float(self._force @ np.asarray(direction, dtype=float))
+
+    def torque(self, axis: NDArray[np.float64]) -> float:
+        """Sensed torque about world ``axis`` through the hand origin [N·m]."""
+        return float(self._torque @ np.asarray(axis, dtype=float))
+
+    def time(self) -> float:
+        """The clock [s]: the simulated time the program has run."""
+        return self._time
 
     # ---- hooks
 

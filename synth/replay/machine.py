@@ -169,26 +169,10 @@ class ReplayMachine(TimelineMachine[Motion]):
         """The hand's true pose [m]: the reading times the current positioning error."""
         return self._sensed * self._error
 
-    def opening(self) -> float:
-        """The finger opening [m]."""
-        return self._opening
-
-    def force(self, direction: NDArray[np.float64]) -> float:
-        """Sensed force along world ``direction`` [N] (the reaction on the hand and pin)."""
-        return float(self._force @ np.asarray(direction, dtype=float))
-
-    def torque(self, axis: NDArray[np.float64]) -> float:
-        """Sensed torque about world ``axis`` through the hand origin [N·m]."""
-        return float(self._torque @ np.asarray(axis, dtype=float))
-
     @property
     def configuration(self) -> NDArray[np.float64]:
         """The arm's joint configuration now (a copy): where a later program starts."""
         return self._q.copy()
-
-    def time(self) -> float:
-        """The simulated clock [s]."""
-        return self._time
 
     def held_pin(self) -> PinState | None:
         """The pin the hand holds, if any."""
