@@ -5,22 +5,27 @@
   reject those candidates naming the palm and the plate, and take a hand-down grasp;
 * a block ±0.5 in, ±3° sideways with an exact height: no error moves its top up, so the pin
   1 in above it is clear (the ball margin, 2.68 cm, refused every candidate);
-* the arm's own bodies and the held pin keep no margins against each other.
+* the arm's own bodies and the held pin keep no margins against each other;
+* a pin seated through a plate rests on the table, which its insertion may touch.
 """
 
 from __future__ import annotations
 
 import math
 
+import coal
 import numpy as np
 import pinocchio as pin
 import pytest
-from _paths import DATA_TASKS
+from _paths import DATA_TASKS, TASKS
 from _tasks import synthesized
 
+from synth.exceptions import SynthError
 from synth.models.arm import CollisionScene, nearest_solution
 from synth.models.loader import load_task
 from synth.models.workcell import NominalPoses, WorkcellModel
+from synth.replay.run import replay_context
+from synth.replay.trace import record_run
 from synth.strategies.context import plan_context
 from synth.strategies.planner import plan_task
 from synth.strategies.records import Grasp
@@ -28,6 +33,7 @@ from synth.units import CM, DEG
 
 DOWEL = DATA_TASKS / "short_dowel_plate.yaml"
 SIDEWAYS = DATA_TASKS / "sideways_error.yaml"
+THROUGH = DATA_TASKS / "through_hole_plate.yaml"
 
 
 @pytest.fixture(scope="module")
@@ -142,3 +148,45 @@ def test_approach_height_follows_the_certified_height_error() -> None:
     assert s.standoff >= s.errors.dz + held + 1e-3 - 1e-9
     assert s.dtry - s.d_f >= s.errors.dz + 1e-3 - 1e-9
     assert len(proven.attempts) == 1 and proven.proof.outcomes == {"success": 10}
+
+
+def test_a_pin_seated_through_a_plate_rests_on_the_table_and_plans(monkeypatch) -> None:
+    # A hole through a 2 cm plate, d_f = 2 cm: the seated pin's end is on the table, the hole's
+    # bottom. Checked on a fresh Coal pair, the pin at its believed seat against the table
+    # slab: they touch (distance 0 within the slab's float error), so a sweep that kept the
+    # 1 mm clearance from the table refused every candidate ("sweeps PIN1 into table").
+    spec = load_task(THROUGH)
+    ctx = plan_context(spec)
+    model = WorkcellModel(ctx.graph, [ctx.arm.world_from_base.translation])
+    table = model.place(NominalPoses(ctx.graph)).obstacles
+    slab = next(o for o in table if o.name == "table")
+    seat = ctx.world_hole * pin.SE3(np.eye(3), np.array([0.0, 0.0, -2.0 * CM]))
+    standing = model.pin_obstacle("pin1", seat)
+    gap = coal.distance(
+        standing.geometry,
+        coal.Transform3s(standing.pose.rotation, standing.pose.translation),
+        slab.geometry,
+        coal.Transform3s(slab.pose.rotation, slab.pose.translation),
+        coal.DistanceRequest(),
+        coal.DistanceResult(),
+    )
+    assert abs(gap) < 1e-9
+    # What a part stands on: the table here; the fixture for the box located in one
+    assert ctx.gross.support_of(ctx.graph, "BOX") == "table"
+    in_fixture = plan_context(load_task(TASKS / "seed_4_8_fixture.yaml"))
+    assert in_fixture.gross.support_of(in_fixture.graph, "BOX") == "FIX"
+    # Without the through hole's exemption the planner refuses for the table alone
+    monkeypatch.setattr("synth.strategies.fine._through_bottom", lambda *a, **k: None)
+    with pytest.raises(SynthError) as refused:
+        plan_task(spec)
+    assert "insertion into BH1 sweeps PIN1 into table" in str(refused.value)
+    monkeypatch.undo()
+    # With it the plan is proven, and its replays seat the pin on the table: the true pin end
+    # 2 cm under the true plate's face is at z = 0 (the plate stands on the table, z exact)
+    proven = synthesized(THROUGH, trials=20)
+    assert proven.proof.nominal.outcome == "success", proven.proof.nominal.message
+    assert proven.proof.outcomes == {"success": 20}
+    context = replay_context(proven.program, spec)
+    trace = record_run(context, trial=3, seed=0)
+    assert trace.report.outcome == "success"
+    assert trace.samples[-1].pins["PIN1"].translation[2] == pytest.approx(0.0, abs=1e-4)

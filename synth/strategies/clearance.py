@@ -76,8 +76,8 @@ from synth.models.arm import (
 from synth.models.arm.bodies import bounding_radius
 from synth.models.arm.sweep import Displacement, LinkDisplacement
 from synth.models.graph import AttributeGraph
-from synth.models.spec import Uncertainty
-from synth.models.workcell import NominalPoses, PinModel, WorkcellModel
+from synth.models.spec import WORLD, Uncertainty
+from synth.models.workcell import TABLE, NominalPoses, PinModel, WorkcellModel
 from synth.strategies.records import Grasp
 
 __all__ = [
@@ -272,15 +272,27 @@ class GrossMotionCheck:
         displacements = {k: v for k, v in self.fine_motion.displacements.items() if k != part}
         return SweepOptions(displacements=displacements, rigid=self.fine_motion.rigid)
 
-    def fine(self, grasp: Grasp, part: str | None) -> CollisionScene:
-        """The arm holding the pin by ``grasp`` near the target ``part`` (the pin may touch it)."""
+    def support_of(self, graph: AttributeGraph, part: str) -> str:
+        """The solid ``part`` stands on: its nearest ancestor's solid, else the table."""
+        frame = self.solid_frames.get(part)
+        below = None if frame is None or frame == WORLD else graph.parent(frame)
+        above = None if below is None or below == WORLD else self.part_of(graph, below)
+        return TABLE if above is None else above
+
+    def fine(self, grasp: Grasp, part: str | None, bottom: str | None = None) -> CollisionScene:
+        """The arm holding the pin by ``grasp`` near the target ``part`` (the pin may touch it).
+
+        ``bottom``: a solid the pin may touch as well, the one a hole through ``part`` opens
+        onto (:meth:`support_of`), where the seated pin rests.
+        """
         holding = self.holding(grasp)
-        key: tuple[object, ...] = ("fine", part, id(holding))
+        key: tuple[object, ...] = ("fine", part, bottom, id(holding))
         scene = self._scenes.get(key)
         if scene is None:
             allowed = [*holding.allowed]
-            if part is not None:
-                allowed.append(frozenset((self.carried.name, part)))
+            for touched in (part, bottom):
+                if touched is not None:
+                    allowed.append(frozenset((self.carried.name, touched)))
             scene = holding.with_held(holding.held, allowed)
             self._scenes[key] = scene
         return scene

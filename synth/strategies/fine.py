@@ -24,7 +24,9 @@ The hand follows the target part in these moves (the pin touches it or sits in i
 part and the arm keep the clearance only, the other solids their own directional margins
 (:meth:`~synth.strategies.clearance.GrossMotionCheck.fine_options`); the held pin may touch the
 target part, since its tip enters the hole or lands on the surface (the replay decides that
-contact). A candidate with an obstructed fine motion is rejected, the bodies named.
+contact), and in the insertion into a hole through its part what the part stands on, where the
+seated pin rests (:func:`_through_bottom`). A candidate with an obstructed fine motion is
+rejected, the bodies named.
 """
 
 from __future__ import annotations
@@ -37,6 +39,7 @@ import numpy as np
 import pinocchio as pin
 
 from synth.models.arm import CollisionScene, SweepOptions
+from synth.models.spec import BoxShape
 from synth.strategies.approach import Candidate, hand_at
 from synth.strategies.context import Configuration, PlanContext
 from synth.strategies.records import Destination, PinInHoleStrategy
@@ -44,6 +47,8 @@ from synth.strategies.relations import hole_frame_offset
 from synth.strategies.search import inside, pattern_points
 
 __all__ = ["fine_motion_obstruction", "search_offsets"]
+
+_THROUGH = 1e-6  # [m]: a hole this near its box's height goes through (the loader's tolerance)
 
 
 def search_offsets(strategy: PinInHoleStrategy) -> list[tuple[float, float]]:
@@ -73,6 +78,20 @@ def _pin_world(ctx: PlanContext, destination: Destination) -> pin.SE3:
     return ctx.graph.world_from(ctx.graph.resolve(destination.base)) * destination.xf
 
 
+def _through_bottom(ctx: PlanContext, part: str) -> str | None:
+    """The solid a hole through ``part`` opens onto (its support), or None for a blind hole.
+
+    A hole as deep as its box is tall goes through it (:func:`synth.models.meshes.box_with_holes`)
+    and its bottom is what the box stands on: the pin seated at d_f = depth rests there, so the
+    insertion's held pin may touch it as it touches the part. The insertion goes down the bore,
+    so that is the only place it can.
+    """
+    box = ctx.graph.node(ctx.gross.solid_frames[part]).shape
+    if not isinstance(box, BoxShape) or ctx.hole_shape.depth < box.size[2] - _THROUGH:
+        return None
+    return ctx.gross.support_of(ctx.graph, part)
+
+
 def fine_motion_obstruction(
     ctx: PlanContext, cand: Candidate, strategy: PinInHoleStrategy
 ) -> str | None:
@@ -89,7 +108,9 @@ def fine_motion_obstruction(
         inner = zip(cand.axis.heights[1:-1], cand.axis.configurations[1:-1], strict=True)
         vias = [q for z, q in inner if z > -d_f]
     insertion = [cand.q_hole_approach, *vias, cand.q_destination]
-    reason = _sweep(ctx, scene, insertion, f"insertion into {hole}", options)
+    bottom = None if part is None else _through_bottom(ctx, part)
+    inserting = scene if bottom is None else gross.fine(grasp, part, bottom)
+    reason = _sweep(ctx, inserting, insertion, f"insertion into {hole}", options)
     if reason is not None:
         return reason
     for x, y in search_offsets(strategy):
