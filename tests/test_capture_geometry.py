@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Callable
 
 import coal
 import numpy as np
@@ -196,3 +197,30 @@ def test_capture_agrees_with_coal_on_the_full_grid(parts: tuple[HoleSite, PinMod
     lateral = [0, 0.1, 0.2, 0.3, 0.4, 0.42, 0.44, 0.46, 0.5, 0.55, 0.6, 0.65, 0.7]
     counts = compare(parts, grid(lateral, [0, 0.25, 1, 3, 10, 20, 30, 40], [0, 60, 120, 180, 270]))
     assert counts["agree"] >= 480
+
+
+def test_minima_over_circles_refine_each_row_as_if_alone() -> None:
+    """The eight minima of an entry contact are refined together; each row must come out as a
+    refinement of that row alone would make it, bit for bit (only elementwise arithmetic and a
+    per-row argmin: rows cannot mix). Functions with one, two and no finite minima on the grid.
+    """
+    from synth.replay.capture import _GRID, _refine
+
+    shifts = np.array([[0.3], [2.0], [5.9], [1.0]])
+
+    def over(rows: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+        def evaluate(phi: np.ndarray) -> np.ndarray:
+            v = np.cos(phi - rows) + 0.4 * np.cos(2.0 * (phi - rows)) + rows
+            v[rows[:, 0] == 1.0] = np.inf  # the row shifted by 1 is nowhere finite
+            return v
+
+        return evaluate
+
+    grid = over(shifts)(np.broadcast_to(_GRID, (4, _GRID.size)))
+    together = _refine(over(shifts), grid)
+    for index in range(4):
+        alone = _refine(over(shifts[index : index + 1]), grid[index : index + 1])
+        assert together[0][index] == alone[0][0] and together[1][index] == alone[1][0]
+    # a refined minimum lies at or below the grid's (the cosine pair's true minimum is below it)
+    assert np.all(together[0][:3] <= grid[:3].min(axis=1))
+    assert together[0][3] == math.inf and together[1][3] == 0.0

@@ -174,13 +174,26 @@ class _Solid:
         """(height along the axis, radius) of the tip rim, the taper's top and the head rim."""
         return [(0.0, self.a), (self.h, self.b), (self.length, self.b)]
 
-    def rim(self, height: float, radius: float, psi: FloatArray) -> FloatArray:
-        """Points of one rim circle, shape (n, 3)."""
-        ring = np.cos(psi)[:, None] * self.e1 + np.sin(psi)[:, None] * self.e2
-        return np.asarray(self.c + height * self.u + radius * ring)
+    def rings(
+        self, heights: FloatArray, radii: FloatArray, cos: FloatArray, sin: FloatArray
+    ) -> FloatArray:
+        """Points of rim circles, row k at angles ψ (cos ψ, sin ψ) on circle (h_k, ρ_k).
+
+        Shape ``cos.shape + (3,)``: c + h·u + ρ·(cos ψ·e₁ + sin ψ·e₂).
+        """
+        ring = cos[..., None] * self.e1 + sin[..., None] * self.e2
+        base = self.c + heights[:, None] * self.u  # c + h·u, one row per circle
+        return np.asarray(base[:, None, :] + radii[:, None, None] * ring)
 
     def lowest(self, x: FloatArray, y: FloatArray) -> FloatArray:
-        """L(x, y): the lowest z of the pin on each vertical line (+inf where it misses)."""
+        """L(x, y): the lowest z of the pin on each vertical line (+inf where it misses).
+
+        The shaft's and the taper's first points are found in one pass of
+        :func:`_first_inside` (the two problems side by side); any shape of ``x`` and ``y``.
+        """
+        shape = x.shape
+        x, y = x.reshape(-1), y.reshape(-1)
+        n = x.size
         d0 = np.stack([x - self.c[0], y - self.c[1], np.full_like(x, -self.c[2])], axis=1)
         a0 = d0 @ self.u  # height along the pin axis at t = 0; it grows as a1·t
         a1 = float(self.u[2])
@@ -189,17 +202,21 @@ class _Solid:
         const = (
             np.einsum("ij,ij->i", d0, d0) - a0 * a0
         )  # radial distance² = quad t² + lin t + const
-        shaft = _first_inside(
-            quad, lin, const - self.b**2, (self.h - a0) / a1, (self.length - a0) / a1
-        )
         if self.h <= 0.0:
-            return shaft
+            shaft = _first_inside(
+                quad, lin, const - self.b**2, (self.h - a0) / a1, (self.length - a0) / a1
+            )
+            return shaft.reshape(shape)
         k = (self.b - self.a) / self.h  # radius a + k·(height) on the taper
         r0, r1 = self.a + k * a0, k * a1
-        taper = _first_inside(
-            quad - r1 * r1, lin - 2.0 * r0 * r1, const - r0 * r0, -a0 / a1, (self.h - a0) / a1
+        first = _first_inside(
+            np.concatenate([np.full(n, quad), np.full(n, quad - r1 * r1)]),
+            np.concatenate([lin, lin - 2.0 * r0 * r1]),
+            np.concatenate([const - self.b**2, const - r0 * r0]),
+            np.concatenate([(self.h - a0) / a1, -a0 / a1]),
+            np.concatenate([(self.length - a0) / a1, (self.h - a0) / a1]),
         )
-        return np.minimum(shaft, taper)
+        return np.minimum(first[:n], first[n:]).reshape(shape)
 
     def normals(self, point: FloatArray, rim_tangent: FloatArray) -> tuple[list[FloatArray], bool]:
         """The pin's outward unit normals at a ``point`` of its surface touching the hole's rim.
@@ -291,31 +308,47 @@ def _first_inside(
     return out
 
 
-def _refine(f: Callable[[FloatArray], FloatArray], values: FloatArray) -> tuple[float, float]:
-    """The minimum over φ of f, from its ``values`` on the grid, refined around the best.
+def _refine(
+    evaluate: Callable[[FloatArray], FloatArray], values: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """Per row, the minimum over φ of a function, from its ``values`` on the grid, refined.
 
-    Returns (minimum, φ); +inf when f is nowhere finite.
+    Row k of ``values`` is function k on :data:`_GRID`; ``evaluate`` takes a matrix of angles,
+    row k for function k, and returns their values. Each row's best grid angle is refined
+    :data:`_LEVELS` times on :data:`_REFINE` angles about the best so far, all rows in step.
+    Returns (minima, φ); +inf and 0 for a row nowhere finite on the grid.
     """
-    i = int(np.argmin(values))
-    best, where = float(values[i]), float(_GRID[i])
-    if not math.isfinite(best):
-        return math.inf, 0.0
+    rows = np.arange(values.shape[0])
+    i = np.argmin(values, axis=1)
+    best, where = values[rows, i].copy(), _GRID[i].copy()
+    finite = np.isfinite(best)
+    best[~finite], where[~finite] = math.inf, 0.0
+    if not finite.any():
+        return best, where
     step = 2.0 * math.pi / _ANGLES
     for _ in range(_LEVELS):
-        phi = np.linspace(where - step, where + step, _REFINE)
-        v = f(phi)
-        j = int(np.argmin(v))
-        if v[j] < best:
-            best, where = float(v[j]), float(phi[j])
+        phi = np.linspace(where - step, where + step, _REFINE, axis=1)
+        v = evaluate(phi)
+        j = np.argmin(v, axis=1)
+        lower = finite & (v[rows, j] < best)
+        best[lower], where[lower] = v[rows, j][lower], phi[rows, j][lower]
         step = 2.0 * step / (_REFINE - 1)
     return best, where
 
 
 _GRID = np.linspace(0.0, 2.0 * math.pi, _ANGLES, endpoint=False)
+_GRID_COS, _GRID_SIN = np.cos(_GRID), np.sin(_GRID)
 
 
 def entry_contact(hole: HoleSite, pin_model: PinModel, placement: TipPlacement) -> EntryContact:
-    """Where the pin, let down along the hole's axis, first touches the part (module docstring)."""
+    """Where the pin, let down along the hole's axis, first touches the part (module docstring).
+
+    Eight minima over a circle, found together (:func:`_refine`): each of the three rims'
+    drop onto the face (ρ > r_m) and into the mouth (the chamfer, z − ρ + r_m, or the bottom,
+    z + depth), and the lower envelope over the chamfer's lower edge (ρ = r, + w) and over the
+    mouth's rim (ρ = r_m). A rim's minimum counts only where its grid minimum is below what the
+    rims before it found (the order of the module's proof).
+    """
     if placement.tilt >= 0.5 * math.pi:
         return EntryContact(None)  # head first or lying down: no tip to enter with
     r, w, r_m, depth = hole.radius, hole.chamfer, hole.mouth_radius, hole.depth
@@ -326,44 +359,39 @@ def entry_contact(hole: HoleSite, pin_model: PinModel, placement: TipPlacement) 
         return EntryContact(None)  # no point of the pin above the mouth
     c, u = placement.local()
     solid = _Solid(pin_model, c, u)
+    rims = solid.rims()
+    heights = np.array([h for h, _ in rims] * 2)  # rows 0–2 onto the face, 3–5 into the mouth
+    radii = np.array([radius for _, radius in rims] * 2)
+    into = np.arange(6) >= 3
+    envelope_radii = np.array([r, r_m])  # rows 6, 7: the chamfer's lower edge, the mouth's rim
+    lifts = np.array([w, 0.0])
 
-    def on_face(height: float, radius: float) -> Callable[[FloatArray], FloatArray]:
-        def f(psi: FloatArray) -> FloatArray:  # a rim's drop onto the face, ρ > r_m
-            p = solid.rim(height, radius, psi)
-            return np.where(np.hypot(p[:, 0], p[:, 1]) > r_m, p[:, 2], np.inf)
+    def drops(p: FloatArray, into: NDArray[np.bool_]) -> FloatArray:
+        """A rim's drop onto the face (ρ > r_m) or, where ``into``, into the mouth."""
+        rho, z = np.hypot(p[..., 0], p[..., 1]), p[..., 2]
+        inside = np.where(rho < r, z + depth, z - rho + r_m)
+        return np.where(into, np.where(rho < r_m, inside, np.inf), np.where(rho > r_m, z, np.inf))
 
-        return f
+    def evaluate(psi: FloatArray) -> FloatArray:
+        cos, sin = np.cos(psi), np.sin(psi)
+        rim_drops = drops(solid.rings(heights, radii, cos[:6], sin[:6]), into[:, None])
+        around = envelope_radii[:, None] * cos[6:], envelope_radii[:, None] * sin[6:]
+        return np.vstack([rim_drops, solid.lowest(*around) + lifts[:, None]])
 
-    def in_mouth(height: float, radius: float) -> Callable[[FloatArray], FloatArray]:
-        def f(psi: FloatArray) -> FloatArray:  # a rim's drop onto the chamfer or the bottom
-            p = solid.rim(height, radius, psi)
-            rho = np.hypot(p[:, 0], p[:, 1])
-            inside = np.where(rho < r, p[:, 2] + depth, p[:, 2] - rho + r_m)
-            return np.where(rho < r_m, inside, np.inf)
-
-        return f
-
-    def envelope(radius: float, lift: float) -> Callable[[FloatArray], FloatArray]:
-        def f(phi: FloatArray) -> FloatArray:  # the lower envelope over a circle, + S's drop
-            return solid.lowest(radius * np.cos(phi), radius * np.sin(phi)) + lift
-
-        return f
-
-    face = math.inf
-    mouth = math.inf
-    for height, radius in solid.rims():
-        points = solid.rim(height, radius, _GRID)
-        rho, z = np.hypot(points[:, 0], points[:, 1]), points[:, 2]
-        outside = np.where(rho > r_m, z, np.inf)
-        inside = np.where(rho < r_m, np.where(rho < r, z + depth, z - rho + r_m), np.inf)
-        if outside.min() < face:
-            face = min(face, _refine(on_face(height, radius), outside)[0])
-        if inside.min() < mouth:
-            mouth = min(mouth, _refine(in_mouth(height, radius), inside)[0])
-    edge = envelope(r, w)  # the chamfer's lower edge, ρ = r, z = −w
-    mouth = min(mouth, _refine(edge, edge(_GRID))[0])
-    lip = envelope(r_m, 0.0)  # the mouth's rim
-    rim, phi = _refine(lip, lip(_GRID))
+    # on the grid each rim's points serve both its drops, and every row's angles are the same
+    points = solid.rings(heights[:3], radii[:3], _GRID_COS[None, :], _GRID_SIN[None, :])
+    both = np.concatenate([points, points])
+    around = envelope_radii[:, None] * _GRID_COS, envelope_radii[:, None] * _GRID_SIN
+    grid = np.vstack([drops(both, into[:, None]), solid.lowest(*around) + lifts[:, None]])
+    minima, phis = _refine(evaluate, grid)
+    face = mouth = math.inf
+    for k in range(3):
+        if grid[k].min() < face:
+            face = min(face, float(minima[k]))
+        if grid[3 + k].min() < mouth:
+            mouth = min(mouth, float(minima[3 + k]))
+    mouth = min(mouth, float(minima[6]))
+    rim, phi = float(minima[7]), float(phis[7])
     slope, corner = solid.rim_slope(r_m, phi, rim) if math.isfinite(rim) else (0.0, False)
     where: Literal["mouth", "rim", "face"] | None
     if not math.isfinite(min(face, mouth, rim)):
