@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from synth.vec3 import cross3
+from synth.vec3 import cross3, norm3
 
 
 def test_cross3_is_np_cross_bit_for_bit() -> None:
@@ -26,3 +26,17 @@ def test_cross3_of_the_axes_is_right_handed() -> None:
     assert np.array_equal(cross3(y, z), x)
     assert np.array_equal(cross3(z, x), y)
     assert np.array_equal(cross3(y, x), -z)
+
+
+def test_norm3_is_np_linalg_norm_bit_for_bit() -> None:
+    # the same magnitudes, and the non-finite and zero vectors the contact code guards against
+    rng = np.random.default_rng(20261207)
+    scale = 10.0 ** rng.uniform(-6.0, 6.0, size=(20_000, 1))
+    vectors = list(rng.normal(size=(20_000, 3)) * scale) + [
+        np.zeros(3),
+        np.array([-0.0, 0.0, -0.0]),
+        np.array([np.inf, 1.0, 0.0]),
+        np.array([np.nan, 1.0, 0.0]),
+    ]
+    for v in vectors:
+        assert np.float64(norm3(v)).tobytes() == np.float64(np.linalg.norm(v)).tobytes()

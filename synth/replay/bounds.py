@@ -53,7 +53,7 @@ from numpy.typing import NDArray
 
 from synth.models.arm import Arm
 from synth.replay.motion import Segment
-from synth.vec3 import cross3
+from synth.vec3 import cross3, norm3
 
 __all__ = ["ArmChain", "PinExtent", "PinFlight", "curvatures", "safe_step"]
 
@@ -223,16 +223,14 @@ class PinFlight:
         g_r, g_t = np.array(grip.rotation), np.array(grip.translation)
         self._x_r, self._x_t, self._g_r, self._g_t = x_r, x_t, g_r, g_t
         reach = extent.reach
-        t_e = max(
-            float(np.linalg.norm(seg.e0.translation)), float(np.linalg.norm(seg.e1.translation))
-        )
+        t_e = max(norm3(seg.e0.translation), norm3(seg.e1.translation))
         theta_e = max(
-            float(np.linalg.norm(pin.log3(seg.e0.rotation))),
-            float(np.linalg.norm(pin.log3(seg.e1.rotation))),
+            norm3(pin.log3(seg.e0.rotation)),
+            norm3(pin.log3(seg.e1.rotation)),
         )
         self.radius = extent.radius + t_e + theta_e * reach
-        turn = float(np.linalg.norm(pin.log3(seg.e0.rotation.T @ seg.e1.rotation)))
-        shift = float(np.linalg.norm(seg.e1.translation - seg.e0.translation))
+        turn = norm3(pin.log3(seg.e0.rotation.T @ seg.e1.rotation))
+        shift = norm3(seg.e1.translation - seg.e0.translation)
         self.blend = shift + turn * reach
         levers = chain.levers(
             chain.mask(self.joint)[None, :], np.array([self.radius]), self.q0, self.q0 + self.delta
@@ -266,11 +264,7 @@ class PinFlight:
         inner_r = self._x_r @ r_e
         self.rotation = m_r @ (inner_r @ self._g_r)
         self.translation = m_r @ (inner_r @ self._g_t + self._x_r @ t_e + self._x_t) + m_t
-        self.speed = (
-            float(np.linalg.norm(self.velocity))
-            + float(np.linalg.norm(self.omega)) * self.radius
-            + self.blend
-        )
+        self.speed = norm3(self.velocity) + norm3(self.omega) * self.radius + self.blend
 
     def tip(self, s: float) -> NDArray[np.float64]:
         """The pin frame's origin (its tip centre) at ``s`` [m]; leaves :meth:`at`'s values."""

@@ -73,7 +73,7 @@ from numpy.typing import NDArray
 
 from synth.models.spec import DEFAULT_FRICTION
 from synth.models.workcell import HoleSite, PinModel
-from synth.vec3 import cross3
+from synth.vec3 import cross3, norm3
 
 __all__ = [
     "EntryContact",
@@ -166,7 +166,7 @@ class _Solid:
         self.a, self.b = model.radius_at(0.0), model.radius
         self.h, self.length = model.shape.tip_taper_length, model.length
         e1 = cross3(_ZHAT, u)
-        norm = float(np.linalg.norm(e1))
+        norm = norm3(e1)
         e1 = e1 / norm if norm > 1e-12 else np.array([1.0, 0.0, 0.0])
         self.e1, self.e2 = e1, cross3(u, e1)
 
@@ -231,7 +231,7 @@ class _Solid:
         d = point - self.c
         height = float(d @ self.u)
         radial = d - height * self.u
-        rho = float(np.linalg.norm(radial))
+        rho = norm3(radial)
         e_r = radial / rho if rho > 0.0 else self.e1
         k = (self.b - self.a) / self.h if self.h > 0.0 else 0.0
         taper = (e_r - k * self.u) / math.hypot(1.0, k)
@@ -245,7 +245,7 @@ class _Solid:
         else:
             return [np.asarray(taper if height < self.h else e_r)], False
         common = cross3(cross3(self.u, e_r), rim_tangent)
-        norm = float(np.linalg.norm(common))
+        norm = norm3(common)
         if norm <= _TANGENT:
             return list(cone), True
         common = common / norm

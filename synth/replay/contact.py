@@ -56,7 +56,7 @@ from synth.replay.capture import TipPlacement, captures, seat_depth, tip_placeme
 from synth.replay.guided import BISECTIONS, event_crossing
 from synth.replay.motion import PoseAt
 from synth.replay.wedging import wedges
-from synth.vec3 import cross3
+from synth.vec3 import cross3, norm3
 
 __all__ = ["GJK_MARGIN", "PinContact", "PinGeometry", "Target", "first_contact", "pin_points"]
 
@@ -269,7 +269,7 @@ class PinGeometry:
 def _bound(pin_: PinGeometry, pose: pin.SE3, target: Target) -> tuple[float, bool]:
     """A lower bound on the distance and whether it is exact enough to stop on."""
     centre = pose.act(pin_.centre)
-    sphere = float(np.linalg.norm(centre - target.centre)) - pin_.radius - target.radius
+    sphere = norm3(centre - target.centre) - pin_.radius - target.radius
     if sphere > _FAR:
         return sphere, False
     d = pin_.distance(pose, target, exact=False)[0]
@@ -437,7 +437,7 @@ def _first_contact_flight(
         tolerance). It is computed here from the vertices, so it is exact; the obstacle does
         not move, so it shrinks no faster than the pin's points approach along −n.
         """
-        norm = float(np.linalg.norm(normal))
+        norm = norm3(normal)
         if not (d > halves[k] and np.isfinite(norm) and norm > 1e-12):
             return 0.0
         n = -normal / norm
@@ -693,7 +693,7 @@ def _classify(
             kind = _entry(hole, pin_.model, placement, friction)
             return PinContact(s, kind, name, hole, hole.axis, point, local, d)
     # Coal's normal points from the pin to the obstacle; the surface normal is opposite
-    norm = float(np.linalg.norm(normal)) if np.all(np.isfinite(normal)) else 0.0
+    norm = norm3(normal) if np.all(np.isfinite(normal)) else 0.0
     outward = -normal / norm if norm > 1e-12 else np.zeros(3)
     if not (np.all(np.isfinite(point)) and np.all(np.isfinite(local))):
         point, local = pose.translation.copy(), np.zeros(3)  # degenerate: use the tip

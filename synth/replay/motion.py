@@ -24,6 +24,7 @@ from synth.al.timeline import Timeline
 from synth.models.arm import Obstacle
 from synth.models.workcell import HoleSite
 from synth.replay.report import Violation
+from synth.vec3 import norm3
 
 PoseAt = Callable[[float], pin.SE3]
 """s ∈ [0, 1] ↦ the pin's true world pose [m]."""
@@ -121,7 +122,7 @@ class Segment:
 
     def __post_init__(self) -> None:
         turn = pin.log3(self.e0.rotation.T @ self.e1.rotation)
-        self._angle = float(np.linalg.norm(turn))
+        self._angle = norm3(turn)
         self._axis = turn / self._angle if self._angle > 0.0 else np.zeros(3)
         self._skew = pin.skew(self._axis)
         self._skew2 = self._skew @ self._skew
@@ -241,7 +242,7 @@ def push_reaction(
     step = 1e-4
     a, b = (s - step, s) if s >= step else (s, s + step)
     velocity = np.asarray(position(b), dtype=float) - np.asarray(position(a), dtype=float)
-    norm = float(np.linalg.norm(velocity))
+    norm = norm3(velocity)
     if norm < 1e-12:
         return np.array([0.0, 0.0, 1.0])
     return -velocity / norm

@@ -44,6 +44,7 @@ from synth.replay.motion import Segment, Stop, push_reaction
 from synth.replay.reach import describe_pose
 from synth.replay.report import Violation
 from synth.replay.tubes import Tubes
+from synth.vec3 import norm3
 
 __all__ = [
     "SweepContext",
@@ -291,7 +292,7 @@ def pair_contact(
         result,
     )
     normal = -np.asarray(result.normal, dtype=float)  # Coal's points from a to b
-    norm = float(np.linalg.norm(normal)) if np.all(np.isfinite(normal)) else 0.0
+    norm = norm3(normal) if np.all(np.isfinite(normal)) else 0.0
     normal = normal / norm if norm > 1e-12 else np.zeros(3)
     on_b = np.asarray(result.getNearestPoint2(), dtype=float)
     on_a = np.asarray(result.getNearestPoint1(), dtype=float)

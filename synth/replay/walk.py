@@ -42,6 +42,7 @@ from synth.replay.motion import Phase, PoseAt, Segment, Slide, Stop, point_on, p
 from synth.replay.report import Violation
 from synth.replay.scrape import scrape
 from synth.replay.wedging import wedging_onset
+from synth.vec3 import norm3
 
 __all__ = ["Walk", "WalkContext", "commanded_pose", "pin_speed", "walk_segment"]
 
@@ -117,19 +118,19 @@ def pin_speed(arm: Arm, state: PinState, segment: Segment) -> float:
     swept = JointLimits(limits.names, limits.kinds, low, high, limits.velocity, limits.acceleration)
     rho = body_motion_bounds(arm.model, swept, [body])[0]
     reach = state.model.reach(state.grip)
-    t_e = float(max(np.linalg.norm(segment.e0.translation), np.linalg.norm(segment.e1.translation)))
+    t_e = float(max(norm3(segment.e0.translation), norm3(segment.e1.translation)))
     r_e = float(
         max(
-            np.linalg.norm(pin.log3(segment.e0.rotation)),
-            np.linalg.norm(pin.log3(segment.e1.rotation)),
+            norm3(pin.log3(segment.e0.rotation)),
+            norm3(pin.log3(segment.e1.rotation)),
         )
     )
     margin = np.where(rho > 0, 2.0 * (t_e + r_e * reach), 0.0)
     margin = np.where(np.array(limits.kinds) == "prismatic", 0.0, margin)
     dq = np.abs(segment.q1 - segment.q0)
     d_error = segment.e0.inverse() * segment.e1
-    blend = float(np.linalg.norm(segment.e1.translation - segment.e0.translation))
-    blend += float(np.linalg.norm(pin.log3(d_error.rotation))) * (reach + t_e)
+    blend = norm3(segment.e1.translation - segment.e0.translation)
+    blend += norm3(pin.log3(d_error.rotation)) * (reach + t_e)
     return float((rho + margin) @ dq) + blend
 
 

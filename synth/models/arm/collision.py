@@ -37,6 +37,7 @@ from synth.models.arm.arm import Arm
 from synth.models.arm.bodies import Body
 from synth.models.arm.hand import FINGERS
 from synth.models.arm.sweep import body_motion_bounds, pair_motion_bounds
+from synth.vec3 import norm3
 
 Geometry: TypeAlias = "coal.CollisionGeometry | trimesh.Trimesh"
 
@@ -486,7 +487,7 @@ class CollisionScene:
         exact = k in getattr(self, "_exact_last", ())
         results = (self.geometry_data if exact else self.bound_data).distanceResults
         n = np.asarray(results[k].normal, dtype=float)
-        norm = float(np.linalg.norm(n))
+        norm = norm3(n)
         return n / norm if norm > 0.0 else np.zeros(3)
 
     def clearance(self, q: ArrayLike) -> Clearance:
