@@ -137,6 +137,7 @@ class _Segments:
         self.inp.max_position = (limits.upper + 1e-6).tolist()
         self.inp.synchronization = Synchronization.Phase
         self.zero = [0.0] * n
+        self.scratch = Trajectory(n)  # the search's durations are calculated into it
 
     def plan(
         self,
@@ -144,7 +145,13 @@ class _Segments:
         v0: NDArray[np.float64],
         q1: NDArray[np.float64],
         v1: NDArray[np.float64],
+        into: Trajectory | None = None,
     ) -> Trajectory | None:
+        """Ruckig's trajectory from (q0, v0) to (q1, v1) at rest in acceleration, or None.
+
+        ``into``: a trajectory to calculate into (ruckig overwrites it whole), for a search
+        that reads only its duration; a new one otherwise.
+        """
         inp = self.inp
         inp.current_position = q0.tolist()
         inp.current_velocity = v0.tolist()
@@ -152,7 +159,7 @@ class _Segments:
         inp.target_position = q1.tolist()
         inp.target_velocity = v1.tolist()
         inp.target_acceleration = self.zero
-        trajectory = Trajectory(self.n)
+        trajectory = Trajectory(self.n) if into is None else into
         try:
             result = self.otg.calculate(inp, trajectory)
         except RuntimeError:
@@ -166,7 +173,7 @@ class _Segments:
         q1: NDArray[np.float64],
         v1: NDArray[np.float64],
     ) -> float:
-        trajectory = self.plan(q0, v0, q1, v1)
+        trajectory = self.plan(q0, v0, q1, v1, self.scratch)
         return math.inf if trajectory is None else float(trajectory.duration)
 
 
