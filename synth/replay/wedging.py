@@ -25,6 +25,7 @@ pin seats (h ≤ seat depth).
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 __all__ = ["two_point_depth", "wedges", "wedging_onset"]
 
@@ -45,10 +46,13 @@ def _margin(tilt: float, bore: float, shaft: float, friction: float) -> float:
     return math.atan(friction) - tilt - math.atan2(h, bore)
 
 
+@lru_cache(maxsize=256)
 def wedging_onset(bore: float, shaft: float, friction: float, samples: int = 512) -> float:
     """The least tilt [rad] at which a pin (diameter ``shaft``) can wedge in ``bore`` [m].
 
     ``inf`` if it never can (a large clearance, or no friction); 0 if the pin does not fit.
+    A property of the fit alone, asked at every capture of a replay (~200 evaluations of the
+    margin each): kept for the fits last asked.
     """
     if shaft >= bore:
         return 0.0
