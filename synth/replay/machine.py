@@ -266,19 +266,14 @@ class ReplayMachine(TimelineMachine[Motion]):
     ) -> MotionResult:
         """Move the hand through ``targets`` (see the module docstring)."""
         self._check_move(targets)
-        configurations = [self._q]
-        for k, target in enumerate(targets):
-            try:
-                configurations.append(solve_near(self.arm, pin.SE3(target), configurations[-1]))
-            except ReachProblem as problem:
-                which = "destination" if k == len(targets) - 1 else f"via point {k + 1}"
-                self._raise(
-                    self._violation(problem.kind, line, f"{which}: {problem.detail}", self._time)
-                )
-        durations = [0.0] * len(targets)
-        if any(np.any(b != a) for a, b in itertools.pairwise(configurations)):
-            durations = list(motion_time(self.arm.limits, configurations).segments)
-        durations = segment_times(durations, constraints)
+        configurations, durations, problem = _joint_path(self.arm, self._q, targets)
+        if problem is not None:
+            k = len(configurations) - 1
+            which = "destination" if k == len(targets) - 1 else f"via point {k + 1}"
+            self._raise(
+                self._violation(problem.kind, line, f"{which}: {problem.detail}", self._time)
+            )
+        times = segment_times(list(durations), constraints)
         errors = [self._error] + [self.hand_errors.next() for _ in targets]
         segments = []
         t = 0.0
@@ -290,10 +285,10 @@ class ReplayMachine(TimelineMachine[Motion]):
                     errors[k],
                     errors[k + 1],
                     t,
-                    durations[k],
+                    times[k],
                 )
             )
-            t += durations[k]
+            t += times[k]
         return self._start(self._plan(segments, self.held_pin(), tuple(monitors), line))
 
     def _plan(
@@ -531,3 +526,37 @@ class ReplayMachine(TimelineMachine[Motion]):
         state = self.pins[pin_frame]
         target = self.workcell.hole(hole_frame)
         return goal_verdict(state, target, self.scene, self._q, self.options)
+
+
+_PATHS: dict[bytes, tuple[Arm, list[NDArray[np.float64]], tuple[float, ...]]] = {}
+_PATHS_KEPT = 32
+
+
+def _joint_path(
+    arm: Arm, q: NDArray[np.float64], targets: Sequence[pin.SE3]
+) -> tuple[list[NDArray[np.float64]], tuple[float, ...], ReachProblem | None]:
+    """The configurations reaching ``targets`` in turn from ``q``, the segments' times.
+
+    Each target's solution nearest the one before (:func:`solve_near`), timed by
+    :func:`motion_time` (zeros when the arm does not move). At the first target without an
+    attainable solution the list stops and its problem is returned (no times). A pure function
+    of the arm, ``q`` and the targets, kept for the last few reached: a program's first motion
+    commands the same targets from the same park in every trial.
+    """
+    key = b"".join([q.tobytes(), *(t.homogeneous.tobytes() for t in targets)])
+    kept = _PATHS.get(key)
+    if kept is not None and kept[0] is arm:
+        return [c.copy() for c in kept[1]], kept[2], None
+    configurations = [np.array(q, dtype=float)]
+    for target in targets:
+        try:
+            configurations.append(solve_near(arm, pin.SE3(target), configurations[-1]))
+        except ReachProblem as problem:
+            return configurations, (), problem
+    durations = (0.0,) * len(targets)
+    if any(np.any(b != a) for a, b in itertools.pairwise(configurations)):
+        durations = tuple(motion_time(arm.limits, configurations).segments)
+    while len(_PATHS) >= _PATHS_KEPT:
+        _PATHS.pop(next(iter(_PATHS)))
+    _PATHS[key] = (arm, [c.copy() for c in configurations], durations)
+    return configurations, durations, None
