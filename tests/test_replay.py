@@ -197,6 +197,31 @@ def test_a_target_out_of_the_workspace_is_unreachable_at_its_line() -> None:
     assert report.nominal.line == 3 and "destination" in violation.detail
 
 
+def test_a_kept_joint_path_replays_as_a_fresh_one() -> None:
+    # Every trial's first MOVE commands the same targets from the park, so its joint path is
+    # kept (synth.replay.machine._joint_path). A trial run with the kept paths must end exactly
+    # as one run after forgetting them (outcome, line, time to the bit), and the kept lists
+    # must not be the ones a run holds (a motion must not change what the next trial reads).
+    from synth.replay import machine as replay_machine
+    from synth.replay import run_trial
+
+    context = replay_context(SEED_PROGRAM.read_text(encoding="utf-8"), SEED_TASK)
+    first = [run_trial(context, 0, i) for i in range(3)]
+    assert replay_machine._PATHS  # the first motion's path is kept
+    arm, park = context.arm, context.q_park
+    targets = [arm.forward(park) * pin.SE3(np.eye(3), np.array([0.0, 0.0, -0.02]))]
+    fresh, times, problem = replay_machine._joint_path(arm, park, targets)
+    assert problem is None and len(fresh) == 2 and len(times) == 1
+    fresh[1][:] = np.nan  # what a caller does to its list must not reach the kept one
+    kept, kept_times, _ = replay_machine._joint_path(arm, park, targets)
+    assert not np.isnan(kept[1]).any() and kept_times == times
+    replay_machine._PATHS.clear()
+    again = [run_trial(context, 0, i) for i in range(3)]
+    assert [(r.outcome, r.line, r.time) for r in first] == [
+        (r.outcome, r.line, r.time) for r in again
+    ]
+
+
 def test_a_hand_turned_back_at_the_arm_needs_theta5_beyond_its_limit() -> None:
     # At BPARK with the approach vector pointing up: the boom is about level there, so the
     # hand's z makes more than 110° with it (θ5 ∈ [−110°, 110°], seed L963)

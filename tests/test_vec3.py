@@ -32,7 +32,8 @@ def test_norm3_is_np_linalg_norm_bit_for_bit() -> None:
     # the same magnitudes, and the non-finite and zero vectors the contact code guards against
     rng = np.random.default_rng(20261207)
     scale = 10.0 ** rng.uniform(-6.0, 6.0, size=(20_000, 1))
-    vectors = list(rng.normal(size=(20_000, 3)) * scale) + [
+    vectors = [
+        *(rng.normal(size=(20_000, 3)) * scale),
         np.zeros(3),
         np.array([-0.0, 0.0, -0.0]),
         np.array([np.inf, 1.0, 0.0]),
