@@ -21,6 +21,7 @@ from synth.codegen.emitter import emit_program
 from synth.exceptions import SynthError
 from synth.models.believed import believed_graph
 from synth.models.loader import load_task
+from synth.replay.cell import ReplayOptions
 from synth.replay.run import replay_context, run_trial, trial_world
 from synth.replay.trace import record_run
 from synth.strategies import plan_task
@@ -64,7 +65,13 @@ def test_a_search_that_reaches_a_second_hole_as_deep_is_refused(monkeypatch, tmp
         where = landing(ctx, unchecked)
         assert where is not None
         assert (wrong_hole_problem(ctx, where) is not None) is problem
-    context = replay_context(emit_program(unchecked, believed_graph(deep)), deep)
+    # the traced run searches long after BH2 (~10 s of computing on an idle core): the 20 s
+    # wall budget that stops runaway loops is widened, so a loaded machine cannot fail it
+    context = replay_context(
+        emit_program(unchecked, believed_graph(deep)),
+        deep,
+        options=ReplayOptions(max_wall_time=300.0),
+    )
     lifted = record_run(context, trial=14, seed=0)
     assert lifted.report.outcome == "success"
     bh2 = trial_world(context, 0, 14)[0].pose("bh2")
