@@ -14,6 +14,7 @@ import math
 
 import numpy as np
 import pytest
+import yaml
 from _paths import DATA_TASKS, SEED_TASK
 from _tasks import synthesized
 
@@ -24,13 +25,25 @@ from synth.models.loader import load_task
 from synth.replay.run import replay_context, run_trial, trial_world
 from synth.replay.trace import record_run
 from synth.strategies import plan_task
+from synth.strategies.beside import support_landings
 from synth.strategies.context import end_from_hand, plan_context
-from synth.strategies.landing import hand_height_above_end
+from synth.strategies.landing import hand_height_above_end, landing
+from synth.strategies.records import PinInHoleStrategy
 from synth.units import INCH
 
 BESIDE = DATA_TASKS / "beside_the_box.yaml"
 EDGE = DATA_TASKS / "taper_on_the_edge.yaml"
 PANDA = DATA_TASKS / "panda_palm_past_the_edge.yaml"
+THIN_PLATE = DATA_TASKS / "thin_plate_near_edge.yaml"
+
+
+def _planned_without(monkeypatch, spec, *checks: str) -> PinInHoleStrategy:
+    """The plan the planner makes with ``checks`` (functions of refine) answering None."""
+    for check in checks:
+        monkeypatch.setattr(f"synth.strategies.refine.{check}", lambda *a, **k: None)
+    unchecked = plan_task(spec).strategy
+    monkeypatch.undo()
+    return unchecked
 
 
 def test_the_hands_lowest_point_is_the_fingers_edge_in_closed_form() -> None:
@@ -56,9 +69,7 @@ def test_a_miss_beside_the_box_is_tapped_against(monkeypatch) -> None:
     # an insertion that did not happen.
     spec = load_task(BESIDE)
     graph = believed_graph(spec)
-    monkeypatch.setattr("synth.strategies.refine.false_seat_problem", lambda *a, **k: None)
-    unchecked = plan_task(spec).strategy
-    monkeypatch.undo()
+    unchecked = _planned_without(monkeypatch, spec, "false_seat_problem")
     assert unchecked.tap is None
     context = replay_context(emit_program(unchecked, graph), spec)
     fooled = run_trial(context, 0, 18)
@@ -87,10 +98,7 @@ def test_a_pin_leaning_its_taper_on_the_faces_edge_is_refused(monkeypatch) -> No
     spec = load_task(EDGE)
     graph = believed_graph(spec)
     # (its search also reaches BH3, which the other check refuses: synth.strategies.wrong_hole)
-    for check in ("false_seat_problem", "wrong_hole_problem"):
-        monkeypatch.setattr(f"synth.strategies.refine.{check}", lambda *a, **k: None)
-    unchecked = plan_task(spec).strategy
-    monkeypatch.undo()
+    unchecked = _planned_without(monkeypatch, spec, "false_seat_problem", "wrong_hole_problem")
     # Without the check: no tap, Δz 0.36 cm, t = Δz/τ = 0.48 cm around d_f = 0.9 cm (τ = 0.75,
     # PlanOptions.tau)
     assert unchecked.tap is None
@@ -122,9 +130,7 @@ def test_a_urdf_hands_own_bodies_set_where_it_lands(monkeypatch) -> None:
     spec = load_task(PANDA)
     graph = believed_graph(spec)
     ctx = plan_context(spec)
-    monkeypatch.setattr("synth.strategies.refine.false_seat_problem", lambda *a, **k: None)
-    unchecked = plan_task(spec).strategy
-    monkeypatch.undo()
+    unchecked = _planned_without(monkeypatch, spec, "false_seat_problem")
     grasp = unchecked.pickup.grasp
     assert round(math.degrees(grasp.gamma)) == 100
     # the Panda's palm mesh, its vertices put in the pin end's frame: its lowest point, against
@@ -157,3 +163,59 @@ def test_a_urdf_hands_own_bodies_set_where_it_lands(monkeypatch) -> None:
         plan_task(spec)
     assert "2.01 cm above the pin end" in str(refused.value).splitlines()[0]
     assert "with a tap: a tap would not narrow Δz" in str(refused.value)
+
+
+def test_a_miss_beside_a_thin_plate_on_the_table_is_refused(monkeypatch) -> None:
+    # A 1 cm plate on the table, BH1 drilled through it 0.9 cm from two edges: beside the plate
+    # the pin end comes down on the table 1 cm below the face (the plate's thickness) before
+    # the hand lands (2.6 cm above the end), and d_f is the hole's depth, 1 cm: the success
+    # test reads the miss as the insertion. Without the check the planner wrote the program
+    # (proven 100 of 100) and it failed 15 of 1 000 trials at seed 2, each a false seat.
+    spec = load_task(THIN_PLATE)
+    graph = believed_graph(spec)
+    unchecked = _planned_without(monkeypatch, spec, "support_landing_problem")
+    ctx = plan_context(spec)
+    where = landing(ctx, unchecked)
+    assert where is not None
+    tops, deeper = support_landings(ctx, where, where.hand_height)
+    # the table, the plate's thickness below its face (the task's box: 1.0 cm tall), and no
+    # place off the face where the pin goes down to the hand
+    assert [t.name for t, _ in tops] == ["table"] and not deeper
+    assert tops[0][1] == pytest.approx(0.010, abs=1e-12) and where.passes(tops[0][1])
+    fooled = run_trial(replay_context(emit_program(unchecked, graph), spec), 2, 24)
+    assert fooled.outcome == "failure" and "PIN1 is not in BH1: it rests on table" in fooled.message
+    # With it every candidate is refused, for the search's reach past the edge
+    with pytest.raises(SynthError) as refused:
+        plan_task(spec)
+    first = str(refused.value).splitlines()[0]
+    assert "the position error is too large for a search" in first
+    assert "comes down on the table 1 cm below the face" in first
+
+
+def test_a_top_above_the_support_shields_it(monkeypatch, tmp_path) -> None:
+    # The same plate standing on a 3 cm pallet as wide as the search's reach: the pin end
+    # beside the plate comes down on the pallet's top (1 cm below the face, the plate's
+    # thickness) and never reaches the table 4 cm down.
+    document = yaml.safe_load(THIN_PLATE.read_text(encoding="utf-8"))
+    frames = document["frames"]
+    box = next(f for f in frames if f["name"] == "box")
+    pallet = {
+        "name": "pallet",
+        "al_name": "PALLET",
+        "parent": "world",
+        "pose": {"translation": box["pose"]["translation"]},
+        "shape": {"type": "box", "size": ["20 cm", "20 cm", "3 cm"]},
+    }
+    box["parent"] = "pallet"
+    box["pose"]["translation"] = ["0 cm", "0 cm", "3 cm"]
+    frames.insert(0, pallet)
+    path = tmp_path / "on_a_pallet.yaml"
+    path.write_text(yaml.safe_dump(document, sort_keys=False), encoding="utf-8")
+    stacked = load_task(path)
+    unchecked = _planned_without(monkeypatch, stacked, "support_landing_problem")
+    ctx = plan_context(stacked)
+    where = landing(ctx, unchecked)
+    assert where is not None
+    tops, deeper = support_landings(ctx, where, 0.05)
+    assert [t.name for t, _ in tops] == ["PALLET"] and not deeper
+    assert tops[0][1] == pytest.approx(0.010, abs=1e-12)

@@ -21,6 +21,22 @@ length below it (0.2 cm in a world of a 0.63 cm pin whose program had d_f = 0.9 
 cm, Δz = 0.36 cm: the test passed a pin leaning on the box's edge). That range must lie outside
 the test's window too, as a miss on the face does (d_f − Δz > t) with d_f less the taper.
 
+A pin beside a thin part meets what the part stands on before the hand lands: its end stops
+on that floor, ``u`` below the face, the part's height (a plate 1.0 cm thick on the table, a
+through hole d_f = 1.0 cm deep: u = d_f, and the test passes every such miss; 15 of 1 000
+trials of a program proven 100 of 100). The floor is every believed top at the level of the
+part's bottom (the table's plane z = 0, a pallet's or another box's top, a fixture's floor)
+where it lies under a place the search reaches off the face: the places of
+:func:`~synth.strategies.landing.reached_region`, each attempt only in the worlds whose
+earlier attempts missed, as the search stops at the first capture. Floor under a place the pin
+end reaches before the hand lands, u < h, at a depth the test passes, is refused like the
+hand's landing. Other tops beside the part at other levels (a fixture's walls, a neighbour's
+top, a higher block in between) are not checked: on the seed's fixture cell (A.1) the walls'
+top lies 1.9 cm below the box's face, inside the test's window of d_f = 1.71 cm, and a search
+reaching past the box's corner could stop there, but only in worlds far in the footprint's
+corners (1 000 of 1 000 trials succeed). The tops are horizontal planes, so this is checked
+for an upright box part (a tilted face's pin comes down along its tilted axis: not checked).
+
 The pin can go beside the part only if a place it may come down at, some attempt's offset less
 the footprint (±dx × ±dy turned by ζ), lies off the face's outline; this is checked with shapely
 on the outline (the face's own frame) and the attempts' footprint boxes
@@ -29,13 +45,165 @@ on the outline (the face's own frame) and the attempts' footprint boxes
 
 from __future__ import annotations
 
-import shapely
+from collections.abc import Iterator
+from dataclasses import dataclass
 
-from synth.models.spec import SurfaceShape
+import numpy as np
+import pinocchio as pin
+import shapely
+from shapely import affinity
+
+from synth.models.spec import BoxShape, FixtureShape, PinShape, SurfaceShape
+from synth.models.workcell import TABLE
 from synth.strategies.context import PlanContext
 from synth.strategies.landing import Landing
 
-__all__ = ["false_seat_problem"]
+__all__ = ["Top", "false_seat_problem", "solid_tops", "support_landing_problem", "support_landings"]
+
+
+_UPRIGHT = 1e-6
+"""[1] 1 − cos of the tilt below which a face or a solid's top counts as horizontal."""
+_LEVEL = 1e-9
+"""[m] a top this little below the face is at the face's level."""
+
+
+@dataclass(frozen=True)
+class Top:
+    """A horizontal top a pin end may come down on: ``outline`` (world x, y [m]) at ``z`` [m]."""
+
+    name: str
+    outline: shapely.Geometry
+    z: float
+
+
+def _upright(pose: pin.SE3) -> bool:
+    return float(pose.rotation[2, 2]) >= 1.0 - _UPRIGHT
+
+
+def _top(
+    name: str,
+    pose: pin.SE3,
+    outer: tuple[float, float],
+    z: float,
+    inner: tuple[float, float] = (0.0, 0.0),
+) -> Top:
+    """The top at height ``z`` of frame ``pose``, in the world.
+
+    Its outline is the rectangle ``outer`` (x, y sizes, centred) less the rectangle ``inner``
+    (a fixture's cavity). Turned off upright: the convex hull of the solid's corners (z from
+    0 to ``z`` in its frame) at the highest of them.
+    """
+    corners = [
+        pose.act(np.array([a * outer[0] / 2, b * outer[1] / 2, c]))
+        for a in (-1, 1)
+        for b in (-1, 1)
+        for c in (0.0, z)
+    ]
+    if not _upright(pose):
+        hull = shapely.MultiPoint([p[:2] for p in corners]).convex_hull
+        return Top(name, hull, max(float(p[2]) for p in corners))
+    outline = shapely.MultiPoint([p[:2] for p in corners]).convex_hull
+    if inner[0] > 0.0 and inner[1] > 0.0:
+        cavity = [pose.act(np.array([a * inner[0] / 2, b * inner[1] / 2, z])) for a, b in
+                  ((-1, -1), (1, -1), (1, 1), (-1, 1))]  # fmt: skip
+        outline = outline.difference(shapely.Polygon([p[:2] for p in cavity]))
+    return Top(name, outline, float(pose.act(np.array([0.0, 0.0, z]))[2]))
+
+
+def solid_tops(ctx: PlanContext) -> Iterator[Top]:
+    """The believed solids' horizontal tops, but the carried pin's.
+
+    The table's plane z = 0 (its outline: everywhere the landing can be); a box's top face; a
+    fixture's wall tops and its cavity's floor; a standing pin's head. A solid turned off
+    upright gives the convex hull of its corners at the highest of them (a pin end on a tilted
+    top comes to rest no higher).
+    """
+    graph = ctx.graph
+    yield Top(TABLE, shapely.box(-1e3, -1e3, 1e3, 1e3), 0.0)
+    for name, node in graph.nodes.items():
+        shape = node.shape
+        if name == ctx.pin_frame or shape is None:
+            continue
+        pose = graph.world_from(name)
+        if isinstance(shape, BoxShape):
+            sx, sy, sz = shape.size
+            yield _top(node.al_name, pose, (sx, sy), sz)
+        elif isinstance(shape, FixtureShape):
+            ix, iy, depth = shape.inside
+            outer = (ix + 2 * shape.wall, iy + 2 * shape.wall)
+            yield _top(node.al_name, pose, outer, depth, inner=(ix, iy))
+            yield _top(f"{node.al_name}'s floor", pose, (ix, iy), 0.0)
+        elif isinstance(shape, PinShape):
+            yield _top(node.al_name, pose, (shape.diameter, shape.diameter), shape.length)
+
+
+def support_landings(
+    ctx: PlanContext, where: Landing, above: float
+) -> tuple[list[tuple[Top, float]], bool]:
+    """Tops a pin gone beside the face comes down on less than ``above`` [m] below the face.
+
+    Each with its depth below the face [m]; and whether some place off the face has no top
+    within ``above`` (the pin goes deeper there). The places off the face are the landing
+    region less the outline grown by the pin's radius (nearer, the pin leans on the edge), in
+    the world; a top counts where its outline grown by the pin's radius meets what is left of
+    them, the highest first (the end stops on the first it meets). For a face whose normal is
+    not vertical none is found and every place may go deeper (module docstring).
+    """
+    surface = ctx.hole_shape.surface
+    shape = ctx.graph.node(surface).shape
+    face = ctx.graph.world_from(surface)
+    if not isinstance(shape, SurfaceShape) or not _upright(face):
+        return [], True
+    part = ctx.graph.owner(ctx.hole_frame)
+    bottom = ctx.graph.world_from(part)
+    if not isinstance(ctx.graph.node(part).shape, BoxShape) or not _upright(bottom):
+        return [], True
+    floor = float(bottom.translation[2])  # where the part stands: its box frame's origin
+    radius = ctx.pin_shape.diameter / 2
+    off = where.reached.difference(shapely.Polygon(shape.outline).buffer(radius))
+    if off.is_empty:
+        return [], True  # only the edge is reached: the taper's case, or the hand's
+    left = affinity.affine_transform(
+        off,
+        [*face.rotation[0, :2], *face.rotation[1, :2], *face.translation[:2]],
+    )
+    found = []
+    for top in sorted(solid_tops(ctx), key=lambda t: -t.z):
+        if abs(top.z - floor) > _LEVEL:
+            continue  # only what the part stands on (module docstring)
+        depth = float(face.translation[2]) - top.z
+        if depth >= above:
+            break
+        reach = top.outline.buffer(radius)
+        if not reach.intersects(left):
+            continue
+        if depth > _LEVEL:  # a top at or above the face (the part's own) reads as a miss on it
+            found.append((top, depth))
+        left = left.difference(reach)
+        if left.is_empty:
+            break
+    return found, not left.is_empty
+
+
+def support_landing_problem(ctx: PlanContext, where: Landing) -> str | None:
+    """Why a pin beside the part could come down on a solid where the test reads a seat.
+
+    A top met before the hand lands (less than ``h`` below the face) at a depth u with
+    |d_f − u| ≤ t + Δz (module docstring); None if there is none.
+    """
+    if not _can_go_beside(ctx, where):
+        return None
+    tops, _ = support_landings(ctx, where, where.hand_height)
+    for top, depth in tops:
+        if where.passes(depth):
+            named = "the table" if top.name == TABLE else top.name
+            return (
+                f"a pin that goes down beside {ctx.hole_al}'s face (the footprint and search "
+                f"reach past its edge) comes down on {named} {100 * depth:.3g} cm below the "
+                f"face, within {where.window()} of d_f = {100 * where.d_f:.3g} cm: a miss "
+                "would pass for an insertion"
+            )
+    return None
 
 
 def _can_go_beside(ctx: PlanContext, where: Landing) -> bool:
@@ -72,6 +240,8 @@ def false_seat_problem(ctx: PlanContext, where: Landing) -> str | None:
         )
     if not where.felt(where.hand_height):
         return None
+    if not support_landings(ctx, where, where.hand_height)[1]:
+        return None  # every place off the face has a top under the pin above where the hand lands
     return (
         f"a pin that goes down beside {ctx.hole_al}'s face (the footprint and search reach past "
         f"its edge) stops when the hand lands on the face {100 * where.hand_height:.2f} cm above "

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import coal
 import numpy as np
 import shapely
+from shapely import affinity
 
 from synth.strategies.context import PlanContext, end_from_hand
 from synth.strategies.fine import search_offsets
@@ -30,12 +31,14 @@ __all__ = ["Landing", "hand_height_above_end", "landing", "landing_region"]
 class Landing:
     """Where a strategy's pin end may come down, and how the program reads where it stops.
 
-    ``region``: :func:`landing_region`; ``hand_height`` [m]: :func:`hand_height_above_end` at
+    ``region``: :func:`landing_region`; ``reached``: :func:`reached_region`, the part of it
+    the search goes on to reach; ``hand_height`` [m]: :func:`hand_height_above_end` at
     the strategy's grasp; ``d_f`` [m] the believed seat's depth, ``threshold`` [m] the success
     test's t and ``dz`` [m] the depth error at the test (:attr:`PinInHoleStrategy.dz_at_test`).
     """
 
     region: shapely.Geometry
+    reached: shapely.Geometry
     hand_height: float
     d_f: float
     threshold: float
@@ -66,13 +69,56 @@ def landing(ctx: PlanContext, strategy: PinInHoleStrategy) -> Landing | None:
     dz = strategy.dz_at_test
     if region is None or dz is None:
         return None
+    reached = reached_region(ctx, strategy, _CAPTURED * ctx.insertion.lead)
+    assert reached is not None  # a footprint gives both
     return Landing(
         region,
+        reached,
         hand_height_above_end(ctx, strategy.pickup.grasp),
         ctx.insertion.d_f,
         strategy.success_threshold,
         dz,
     )
+
+
+_CAPTURED = 0.9
+"""The share of the parts' lead within which an attempt counts as capturing the pin, for
+:func:`reached_region` (the replay captures within the lead; a tilted pin near its edge may
+not)."""
+
+
+def reached_region(
+    ctx: PlanContext, strategy: PinInHoleStrategy, capture: float
+) -> shapely.Geometry | None:
+    """The places the pin end may come down at, each attempt in the worlds that reach it.
+
+    An attempt at offset o_k is made only when every attempt before it missed: the pin end
+    against the true hole, o_j − e (e the pin's error, in the footprint F), lay farther than
+    ``capture`` [m] from the axis for each j < k. Attempt k's places are o_k − E_k, E_k = F
+    less the discs of radius ``capture`` about the earlier offsets; their union (face frame,
+    [m]) lies within :func:`landing_region`. None for a strategy without a footprint.
+    """
+    footprint = strategy.errors
+    if footprint is None:
+        return None
+    errors = affinity.rotate(
+        shapely.box(-footprint.dx, -footprint.dy, footprint.dx, footprint.dy),
+        footprint.zeta,
+        origin=(0.0, 0.0),
+        use_radians=True,
+    )
+    face_from_hole = ctx.graph.relative(ctx.hole_shape.surface, ctx.hole_frame)
+    to_face = face_from_hole.rotation[:2, :2]
+    origin = face_from_hole.translation[:2]
+    places = []
+    for x, y in [(0.0, 0.0), *search_offsets(strategy)]:
+        if not errors.is_empty:
+            # o − E: E turned half a turn about the origin, moved to o
+            turned = affinity.scale(errors, -1.0, -1.0, origin=(0.0, 0.0))
+            places.append(affinity.translate(turned, x, y))
+        errors = errors.difference(shapely.Point(x, y).buffer(capture, quad_segs=32))
+    matrix = [*to_face[0], *to_face[1], *origin]
+    return affinity.affine_transform(shapely.union_all(places), matrix)
 
 
 def landing_region(ctx: PlanContext, strategy: PinInHoleStrategy) -> shapely.Geometry | None:

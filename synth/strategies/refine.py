@@ -36,7 +36,7 @@ from synth.errors.estimate import RelationModel, estimate_errors
 from synth.models.spec import WORLD
 from synth.models.world import World
 from synth.strategies.approach import Candidate
-from synth.strategies.beside import false_seat_problem
+from synth.strategies.beside import false_seat_problem, support_landing_problem
 from synth.strategies.context import PlanContext
 from synth.strategies.fine import fine_motion_obstruction
 from synth.strategies.footprint import estimate_footprint, footprint_tables
@@ -281,6 +281,9 @@ def _fine_motions(
         false_seat = false_seat_problem(ctx, where)
         if false_seat is not None:
             return Rejection(cand.name, false_seat, cause="depth"), tap is None
+        landed = support_landing_problem(ctx, where)
+        if landed is not None:
+            return Rejection(cand.name, landed, cause="footprint"), tap is None
         wrong_hole = wrong_hole_problem(ctx, where)
         if wrong_hole is not None:
             return Rejection(cand.name, wrong_hole, cause="footprint"), tap is None
