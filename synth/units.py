@@ -158,6 +158,23 @@ def rate_si(
     return value
 
 
+def rate_kind(text: object, order: int) -> Literal["revolute", "prismatic"] | None:
+    """The joint kind a rate's unit is for: angular (``rad/s``) revolute, linear prismatic.
+
+    None when ``text`` is neither (:func:`rate_si` says why).
+    """
+    try:
+        q = read_quantity(text)
+    except UnitError:
+        return None
+    ureg = registry()
+    if q.dimensionality == (ureg.second**-order).dimensionality:
+        return "revolute"
+    if q.dimensionality == (ureg.meter * ureg.second**-order).dimensionality:
+        return "prismatic"
+    return None
+
+
 def parse_quantity(text: object, dim: Dimension) -> float:
     """Parse a quantity with an explicit unit and return its SI value.
 

@@ -11,13 +11,14 @@ import pinocchio as pin
 import pytest
 from _paths import SEED_TASK
 
-from synth.exceptions import ArmModelError
+from synth.exceptions import ArmModelError, SpecError
 from synth.models.arm import (
     build_stanford_arm,
     load_arm,
     load_stanford_parameters,
     stanford_inverse,
     stanford_inverse_all,
+    task_arm,
 )
 from synth.models.arm.stanford import STANFORD_PARAMETERS_PATH, THETA5, build_stanford_model
 from synth.models.loader import load_task
@@ -298,3 +299,32 @@ def test_an_unreadable_parameter_file_is_named_once_with_the_line(tmp_path: Path
     assert message.count(str(broken)) == 1 and "(line " in message, message
     with pytest.raises(ArmModelError, match="No such file"):
         load_stanford_parameters(tmp_path / "missing.yaml")
+
+
+@pytest.mark.parametrize(
+    ("index", "rate", "kind"),
+    [(5, "3 cm/s", "revolute"), (2, "50 rad/s", "prismatic"), (0, "2 m/s", "revolute")],
+)
+def test_a_rate_in_the_other_kind_of_unit_is_refused_at_its_entry(
+    tmp_path: Path, index: int, rate: str, kind: str
+) -> None:
+    # The Stanford arm's joints are R R P R R R (θ1, θ2, S3, θ4–θ6): a linear rate for a
+    # revolute joint was read as its SI number in rad/s (3 cm/s as 0.03 rad/s, a tenth of the
+    # slowest joint's own limit) and the plan went on with it
+    text = SEED_TASK.read_text(encoding="utf-8")
+    rates = ["1 rad/s", "1 rad/s", "25 cm/s", "1 rad/s", "1 rad/s", "1 rad/s"]
+    rates[index] = rate
+    listed = "".join(f"\n      - {r}" for r in rates)
+    marker = "  arm:\n    model: stanford\n"
+    assert marker in text
+    changed = text.replace(marker, f"{marker}    velocity_limits:{listed}\n", 1)
+    path = tmp_path / "rates.yaml"
+    path.write_text(changed, encoding="utf-8")
+    spec = load_task(path)
+    with pytest.raises(SpecError) as refused:
+        task_arm(spec, SEED_TASK.parent)
+    assert refused.value.path == f"manipulator.arm.velocity_limits[{index}]"
+    assert f"is {kind}" in str(refused.value)
+    # the entry's own line in the task's text
+    lines = changed.splitlines()
+    assert lines[refused.value.line - 1].strip() == f"- {rate}"

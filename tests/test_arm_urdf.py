@@ -127,7 +127,7 @@ def test_task_spec_names_a_urdf_with_relative_paths_and_overrides(planar: Path):
     arm = load_arm(spec, HandSpec(), base_dir=planar.parent)
     assert np.allclose(arm.limits.velocity, [1.0, math.pi / 2, 0.1])
     assert np.allclose(arm.forward(np.zeros(3)).translation, [0.1 + L1 + L2, 0, 0])
-    with pytest.raises(ArmModelError, match="2 velocity limits for 3 joints"):
+    with pytest.raises(ArmModelError, match=r"velocity_limits: 2 values for 3 joints"):
         load_arm(
             spec.model_copy(update={"velocity_limits": (1.0, 1.0)}),
             HandSpec(),

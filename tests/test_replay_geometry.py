@@ -15,6 +15,7 @@ import pinocchio as pin
 import pytest
 from _paths import SEED_TASK
 
+from synth.exceptions import SpecError
 from synth.models.arm.collision import Obstacle
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
@@ -247,3 +248,21 @@ def test_a_seated_pin_dragged_sideways_jams_and_pushed_in_stalls_after_the_give(
     push = guided_motion(bh1, pushed, seat=seat, compliance=1 * CM)
     assert push.kind == "bottom" and math.isclose(push.s, 0.5, abs_tol=1e-6)
     assert push.depth == seat
+
+
+def test_a_hole_below_its_boxs_face_is_refused_at_its_translation(tmp_path) -> None:
+    # BH1's mouth 3 cm up a 4.9 cm box: the field named is the hole's translation, with the
+    # line of the task's text where it is written
+    text = SEED_TASK.read_text(encoding="utf-8")
+    written = "translation: [3.85 cm, 3.20 cm, 4.90 cm]"
+    assert written in text
+    changed = text.replace(written, "translation: [3.85 cm, 3.20 cm, 3.00 cm]", 1)
+    path = tmp_path / "sunk.yaml"
+    path.write_text(changed, encoding="utf-8")
+    spec = load_task(path)
+    with pytest.raises(SpecError) as refused:
+        WorkcellModel(AttributeGraph(spec)).place(nominal_world(AttributeGraph(spec)))
+    index = next(i for i, f in enumerate(spec.frames) if f.name == "bh1")
+    assert refused.value.path == f"frames[{index}].pose.translation"
+    assert "3 cm up" in str(refused.value) and "4.9 cm up" in str(refused.value)
+    assert "3.00 cm]" in changed.splitlines()[refused.value.line - 1]

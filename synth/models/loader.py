@@ -30,7 +30,14 @@ from synth.models.spec import (
     TaskSpec,
     Uncertainty,
 )
-from synth.models.yamlread import DEFAULT_LIMITS, PathKey, YamlLimits, format_path, read_yaml
+from synth.models.yamlread import (
+    DEFAULT_LIMITS,
+    PathKey,
+    YamlLimits,
+    format_path,
+    line_of,
+    read_yaml,
+)
 
 
 def load_task(path: str | Path, *, limits: YamlLimits = DEFAULT_LIMITS) -> TaskSpec:
@@ -76,8 +83,9 @@ def validate_task(data: dict[str, Any], lines: dict[PathKey, int] | None = None)
         err = exc.errors(include_url=False)[0]
         loc = _strip_union_tags(err["loc"])
         message = _message(err)
-        raise SpecError(format_path(loc), message, _line_of(loc, lines)) from None
+        raise SpecError(format_path(loc), message, line_of(loc, lines)) from None
     check_task(spec, lines)
+    spec.remember_lines(lines)
     return spec
 
 
@@ -86,7 +94,7 @@ def check_task(spec: TaskSpec, lines: dict[PathKey, int] | None = None) -> None:
     lines = lines or {}
 
     def fail(loc: PathKey, message: str) -> None:
-        raise SpecError(format_path(loc), message, _line_of(loc, lines))
+        raise SpecError(format_path(loc), message, line_of(loc, lines))
 
     index: dict[str, int] = {}
     al_names: dict[str, PathKey] = {}
@@ -408,14 +416,6 @@ def _strip_union_tags(loc: tuple[Any, ...]) -> PathKey:
             continue
         out.append(part)
     return tuple(out)
-
-
-def _line_of(loc: PathKey, lines: dict[PathKey, int]) -> int | None:
-    # The deepest prefix of the path that the YAML has a node for.
-    for n in range(len(loc), -1, -1):
-        if loc[:n] in lines:
-            return lines[loc[:n]]
-    return None
 
 
 __all__ = ["PARAMS", "check_task", "format_path", "load_task", "parse_task", "validate_task"]

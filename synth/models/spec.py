@@ -22,12 +22,29 @@ import math
 import re
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    PrivateAttr,
+    field_validator,
+    model_validator,
+)
 
 from synth.al.names import NameRole, al_name_problem
 from synth.models.catalog import ARM_MODELS
 from synth.models.contacts import ContactSpec
-from synth.units import INCH, parse_quantity, rate_si, read_quantity, registry, si_magnitude
+from synth.models.yamlread import PathKey, line_of, parse_path
+from synth.units import (
+    INCH,
+    parse_quantity,
+    rate_kind,
+    rate_si,
+    read_quantity,
+    registry,
+    si_magnitude,
+)
 
 _FRAME_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_-]*", re.ASCII)
 """A frame's own name (not its AL name): matched in full, so no trailing newline gets through."""
@@ -504,6 +521,10 @@ class SequenceSpec(_Model):
         return v
 
 
+RATE_FIELDS = ("velocity_limits", "acceleration_limits", "jerk_limits")
+"""The arm's rate overrides, by order: velocity, acceleration, jerk."""
+
+
 def _joint_rates(order: int) -> Any:
     """Per-joint rate limits with units, e.g. ``["2 rad/s", "50 cm/s"]`` → SI floats.
 
@@ -553,6 +574,24 @@ class ArmSpec(_Model):
     velocity_limits: Annotated[tuple[float, ...] | None, _joint_rates(1)] = None
     acceleration_limits: Annotated[tuple[float, ...] | None, _joint_rates(2)] = None
     jerk_limits: Annotated[tuple[float, ...] | None, _joint_rates(3)] = None
+    _rate_kinds: dict[str, tuple[str | None, ...]] = PrivateAttr(default_factory=dict)
+    """Per rate field, the joint kind each entry's unit was written for (angular: revolute,
+    linear: prismatic), kept from the task's text for :func:`synth.models.arm.load_arm`."""
+
+    @model_validator(mode="wrap")
+    @classmethod
+    def _keep_rate_kinds(cls, data: Any, handler: Any) -> Any:
+        spec = handler(data)
+        if isinstance(data, dict):
+            for order, name in enumerate(RATE_FIELDS, start=1):
+                raw = data.get(name)
+                if isinstance(raw, list | tuple):
+                    spec._rate_kinds[name] = tuple(rate_kind(v, order) for v in raw)
+        return spec
+
+    def rate_kinds(self, name: str) -> tuple[str | None, ...]:
+        """The joint kinds the entries of rate field ``name`` were written for (module text)."""
+        return self._rate_kinds.get(name, ())
 
     @field_validator("model")
     @classmethod
@@ -645,6 +684,8 @@ class TaskSpec(_Model):
     name: str
     description: str = ""
     frames: tuple[FrameSpec, ...]
+    _lines: dict[PathKey, int] = PrivateAttr(default_factory=dict)
+    """The YAML line of each field of the task's text (none for a spec built in Python)."""
     insertion: InsertionSpec | None = None
     insertions: SequenceSpec | None = None
     manipulator: ManipulatorSpec | None = None
@@ -663,6 +704,14 @@ class TaskSpec(_Model):
         if self.insertion is not None and self.insertions is not None:
             raise ValueError("give 'insertion' (one step) or 'insertions' (a sequence), not both")
         return self
+
+    def remember_lines(self, lines: dict[PathKey, int]) -> None:
+        """Keep the YAML lines of the task's fields, for errors found after loading."""
+        self._lines = dict(lines)
+
+    def line_of(self, field: str) -> int | None:
+        """The YAML line of ``field`` (``'frames[2].pose'``), or of its nearest parent given."""
+        return line_of(parse_path(field), self._lines)
 
     @property
     def steps(self) -> tuple[InsertionSpec, ...]:

@@ -279,16 +279,21 @@ class WorkcellModel:
                 owner_shape.size[2] if owner_shape is not None and owner_shape.type == "box" else 0
             )
             axis = local.rotation[:, 2]
-            if (
-                owner_shape is None
-                or owner_shape.type != "box"
-                or axis[2] < 1.0 - _PLACEMENT_TOLERANCE
-                or abs(local.translation[2] - top) > _PLACEMENT_TOLERANCE
-            ):
+            tilted = axis[2] < 1.0 - _PLACEMENT_TOLERANCE
+            if owner_shape is None or owner_shape.type != "box" or tilted:
+                field = f"frames[{self._index[node.name]}]" + (".pose.rotation" if tilted else "")
+            elif abs(local.translation[2] - top) > _PLACEMENT_TOLERANCE:
+                field = f"frames[{self._index[node.name]}].pose.translation"
+            else:
+                field = ""
+            if field:
                 raise SpecError(
-                    f"frames[{self._index[node.name]}]",
+                    field,
                     f"hole {node.name!r}: the replay drills holes only into the top face of a box "
-                    "(mouth on the face, axis along the box's z)",
+                    f"(mouth on the face, {100 * top:.4g} cm up the box's frame; axis along the "
+                    f"box's z); its mouth is {100 * float(local.translation[2]):.4g} cm up, "
+                    f"its axis {math.degrees(math.acos(min(1.0, float(axis[2])))):.3g}° off z",
+                    graph.spec.line_of(field),
                 )
             x, y = (round(float(v), 12) for v in local.translation[:2])
             # the drilled axis is the box's z exactly: keep the hole's spin, drop its tilt

@@ -113,6 +113,25 @@ def format_path(loc: PathKey) -> str:
     return text
 
 
+def parse_path(text: str) -> PathKey:
+    """The key of a field path: ``'frames[2].pose.x'`` → ``('frames', 2, 'pose', 'x')``."""
+    loc: list[str | int] = []
+    for part in text.split("."):
+        name, *indices = part.split("[")
+        if name:
+            loc.append(name)
+        loc += [int(i.rstrip("]")) for i in indices if i.rstrip("]").isdigit()]
+    return tuple(loc)
+
+
+def line_of(loc: PathKey, lines: dict[PathKey, int]) -> int | None:
+    """The YAML line of field ``loc``: the deepest prefix of the path the YAML has a node for."""
+    for n in range(len(loc), -1, -1):
+        if loc[:n] in lines:
+            return lines[loc[:n]]
+    return None
+
+
 def _too_deep(limits: YamlLimits) -> str:
     return f"the YAML is nested deeper than {limits.max_depth} levels"
 

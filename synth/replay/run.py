@@ -43,7 +43,7 @@ from synth.al.interpreter import Interpreter
 from synth.al.parser import parse_program
 from synth.codegen.binding import WorldBinding, bind_world
 from synth.exceptions import ALRuntimeError, SpecError
-from synth.models.arm import Arm, manipulator_arm
+from synth.models.arm import Arm, task_arm
 from synth.models.arm.collision import SceneCache
 from synth.models.believed import believed_graph
 from synth.models.graph import AttributeGraph, pose_to_se3
@@ -129,7 +129,7 @@ def replay_context(
     manipulator = spec.manipulator
     if manipulator is None:
         raise SpecError("manipulator", "the replay needs the task's manipulator (arm and park)")
-    arm = manipulator_arm(manipulator, base_dir)
+    arm = task_arm(spec, base_dir)
     park = pose_to_se3(manipulator.park.pose)
     graph = replay_graph(spec, distribution)
     q_park = park_configuration(

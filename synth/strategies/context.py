@@ -24,9 +24,9 @@ from synth.exceptions import SpecError
 from synth.models.arm import (
     Arm,
     CollisionScene,
-    manipulator_arm,
     motion_time,
     nearest_solution,
+    task_arm,
 )
 from synth.models.believed import believed_graph
 from synth.models.graph import AttributeGraph, pose_to_se3
@@ -236,7 +236,7 @@ def plan_context(
     hole_shape = graph.nodes[insertion.hole].shape
     assert isinstance(pin_shape, PinShape) and isinstance(hole_shape, HoleShape)
     manip = spec.manipulator
-    arm = manipulator_arm(manip, base_dir)
+    arm = task_arm(spec, base_dir)
     park = pose_to_se3(manip.park.pose)
     counters = PlanCounters()
     counters.ik += 1

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from synth.exceptions import ArmModelError
+from synth.exceptions import ArmModelError, SpecError
 from synth.models.arm.arm import Arm, ClosedFormInverse
 from synth.models.arm.bodies import Body
 from synth.models.arm.collision import (
@@ -72,7 +72,7 @@ from synth.models.arm.timing import (
 from synth.models.arm.urdf import example_robot_data_dir, load_urdf_arm
 from synth.models.catalog import BUILTIN_ARMS
 from synth.models.graph import pose_to_se3
-from synth.models.spec import ArmSpec, HandSpec, ManipulatorSpec
+from synth.models.spec import RATE_FIELDS, ArmSpec, HandSpec, ManipulatorSpec, TaskSpec
 
 __all__ = [
     "FINGERS",
@@ -110,6 +110,7 @@ __all__ = [
     "best_solution",
     "build_ik",
     "build_stanford_arm",
+    "check_rates",
     "coal_geometry",
     "dexterity",
     "example_robot_data_dir",
@@ -132,6 +133,7 @@ __all__ = [
     "swept_path",
     "swept_segment",
     "swept_trajectory",
+    "task_arm",
 ]
 
 
@@ -141,6 +143,48 @@ def _override(values: tuple[float, ...] | None, n: int, field: str) -> np.ndarra
     if len(values) != n:
         raise ArmModelError(f"{len(values)} values for {n} joints", f"manipulator.arm.{field}")
     return np.array(values)
+
+
+def check_rates(arm_spec: ArmSpec, limits: JointLimits) -> None:
+    """Each rate override: one entry per joint, in the unit of its joint's kind.
+
+    A revolute joint's rate is angular (``2 rad/s``), a prismatic joint's linear (``0.5 m/s``);
+    ``3 cm/s`` for a revolute joint would be read as 0.03 rad/s.
+    """
+    n = len(limits.kinds)
+    for order, name in enumerate(RATE_FIELDS, start=1):
+        values = getattr(arm_spec, name)
+        if values is None:
+            continue
+        if len(values) != n:
+            raise ArmModelError(
+                f"{len(values)} values for {n} joints ({', '.join(limits.names)})",
+                f"manipulator.arm.{name}",
+            )
+        written = arm_spec.rate_kinds(name)
+        for i, (unit_kind, kind) in enumerate(zip(written, limits.kinds, strict=False)):
+            if unit_kind is None or unit_kind == kind:
+                continue
+            power = "" if order == 1 else f"^{order}"
+            example = f"2 rad/s{power}" if kind == "revolute" else f"0.5 m/s{power}"
+            rate = "an angular" if kind == "revolute" else "a linear"
+            raise ArmModelError(
+                f"joint {i + 1} ({limits.names[i]}) is {kind}: its rate is {rate} one, e.g. "
+                f"'{example}'",
+                f"manipulator.arm.{name}[{i}]",
+            )
+
+
+def task_arm(spec: TaskSpec, base_dir: Path | str | None = None) -> Arm:
+    """The task's arm (:func:`manipulator_arm`); a fault of its spec at the field's YAML line."""
+    assert spec.manipulator is not None
+    try:
+        return manipulator_arm(spec.manipulator, base_dir)
+    except ArmModelError as error:
+        if not error.source.startswith("manipulator."):
+            raise
+        message = error.message.removeprefix(f"{error.source}: ")
+        raise SpecError(error.source, message, spec.line_of(error.source)) from None
 
 
 def manipulator_arm(manipulator: ManipulatorSpec, base_dir: Path | str | None = None) -> Arm:
@@ -179,7 +223,7 @@ def load_arm(
             "manipulator.hand",
         )
     if arm_spec.model in BUILTIN_ARMS:
-        return load_builtin_arm(
+        arm = load_builtin_arm(
             arm_spec.model,
             hand_spec,
             world_from_base=base,
@@ -189,8 +233,11 @@ def load_arm(
             acceleration=arm_spec.acceleration_limits,
             jerk=arm_spec.jerk_limits,
         )
+        check_rates(arm_spec, arm.limits)
+        return arm
     if arm_spec.model == "stanford":
         arm = build_stanford_arm(hand_spec, base, tool_offset=offset)
+        check_rates(arm_spec, arm.limits)
         n = arm.nq
         rates = {
             "velocity": _override(arm_spec.velocity_limits, n, "velocity_limits"),
@@ -201,7 +248,7 @@ def load_arm(
             return arm
         return dataclasses.replace(arm, limits=arm.limits.replace(**rates))
     assert arm_spec.urdf is not None and arm_spec.tool_frame is not None  # ArmSpec validates
-    return load_urdf_arm(
+    arm = load_urdf_arm(
         root / arm_spec.urdf,
         arm_spec.tool_frame,
         hand_spec,
@@ -214,3 +261,5 @@ def load_arm(
         jerk=arm_spec.jerk_limits,
         fingers=arm_spec.fingers,
     )
+    check_rates(arm_spec, arm.limits)
+    return arm

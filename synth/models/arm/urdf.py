@@ -189,7 +189,10 @@ def load_urdf_arm(
     )
     for what, values in (("velocity", v), ("acceleration", a), ("jerk", jerk)):
         if values is not None and len(values) != n:
-            raise ArmModelError(f"{len(values)} {what} limits for {n} joints", source)
+            joints = ", ".join(model.names[j] for j in range(1, model.njoints))
+            raise ArmModelError(
+                f"{len(values)} values for {n} joints ({joints})", f"manipulator.arm.{what}_limits"
+            )
     names = tuple(model.names[j] for j in range(1, model.njoints))
     try:
         limits = JointLimits(
