@@ -165,6 +165,8 @@ def test_a_hole_must_fit_its_box_face() -> None:
     bh1["shape"]["chamfer_width"] = "0.29 cm"
     error = refused(data)
     assert error.path == f"frames[{i}].shape" and "strictly inside" in error.detail
+    # in the units the task is written in: 0.32 + 0.29 = 0.61 cm at x = 3.85 cm on 8.9 cm
+    assert "radius 0.61 cm at (3.85, 3.2) cm" in error.detail and "8.9 × 7.6 cm" in error.detail
     bh1["shape"]["chamfer_width"] = "0.25 cm"
     bh1["shape"]["diameter"] = "20 cm"
     assert refused(data).path == f"frames[{i}].shape"

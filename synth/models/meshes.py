@@ -173,9 +173,10 @@ def hole_problem(size: tuple[float, float, float], hole: Sequence[float]) -> str
     mouth = diameter / 2.0 + chamfer
     sx, sy, _ = size
     if abs(x) + mouth >= sx / 2.0 or abs(y) + mouth >= sy / 2.0:
+        cm = 100.0  # a task's sizes are read in cm far more often than in m
         return (
-            f"the mouth (radius {mouth:.4g} m at ({x:.4g}, {y:.4g})) must lie strictly "
-            f"inside the {sx:.4g} × {sy:.4g} m top face"
+            f"the mouth (radius {cm * mouth:.4g} cm at ({cm * x:.4g}, {cm * y:.4g}) cm) must "
+            f"lie strictly inside the {cm * sx:.4g} × {cm * sy:.4g} cm top face"
         )
     return None
 
