@@ -366,15 +366,16 @@ def entry_contact(hole: HoleSite, pin_model: PinModel, placement: TipPlacement) 
     envelope_radii = np.array([r, r_m])  # rows 6, 7: the chamfer's lower edge, the mouth's rim
     lifts = np.array([w, 0.0])
 
-    def drops(p: FloatArray, into: NDArray[np.bool_]) -> FloatArray:
-        """A rim's drop onto the face (ρ > r_m) or, where ``into``, into the mouth."""
+    def drops(p: FloatArray) -> FloatArray:
+        """Rows 0–5's drops: onto the face (ρ > r_m), or into the mouth for rows 3–5."""
         rho, z = np.hypot(p[..., 0], p[..., 1]), p[..., 2]
         inside = np.where(rho < r, z + depth, z - rho + r_m)
-        return np.where(into, np.where(rho < r_m, inside, np.inf), np.where(rho > r_m, z, np.inf))
+        mouth = np.where(rho < r_m, inside, np.inf)
+        return np.where(into[:, None], mouth, np.where(rho > r_m, z, np.inf))
 
     def evaluate(psi: FloatArray) -> FloatArray:
         cos, sin = np.cos(psi), np.sin(psi)
-        rim_drops = drops(solid.rings(heights, radii, cos[:6], sin[:6]), into[:, None])
+        rim_drops = drops(solid.rings(heights, radii, cos[:6], sin[:6]))
         around = envelope_radii[:, None] * cos[6:], envelope_radii[:, None] * sin[6:]
         return np.vstack([rim_drops, solid.lowest(*around) + lifts[:, None]])
 
@@ -382,7 +383,7 @@ def entry_contact(hole: HoleSite, pin_model: PinModel, placement: TipPlacement) 
     points = solid.rings(heights[:3], radii[:3], _GRID_COS[None, :], _GRID_SIN[None, :])
     both = np.concatenate([points, points])
     around = envelope_radii[:, None] * _GRID_COS, envelope_radii[:, None] * _GRID_SIN
-    grid = np.vstack([drops(both, into[:, None]), solid.lowest(*around) + lifts[:, None]])
+    grid = np.vstack([drops(both), solid.lowest(*around) + lifts[:, None]])
     minima, phis = _refine(evaluate, grid)
     face = mouth = math.inf
     for k in range(3):

@@ -64,7 +64,7 @@ __all__ = ["Top", "false_seat_problem", "solid_tops", "support_landing_problem",
 _UPRIGHT = 1e-6
 """[1] 1 − cos of the tilt below which a face or a solid's top counts as horizontal."""
 _LEVEL = 1e-9
-"""[m] a top this little below the face is at the face's level."""
+"""[m] a top this near the part's bottom in height is at its level: part of its floor."""
 
 
 @dataclass(frozen=True)
@@ -140,14 +140,15 @@ def solid_tops(ctx: PlanContext) -> Iterator[Top]:
 def support_landings(
     ctx: PlanContext, where: Landing, above: float
 ) -> tuple[list[tuple[Top, float]], bool]:
-    """Tops a pin gone beside the face comes down on less than ``above`` [m] below the face.
+    """The floor a pin gone beside the face comes down on, if less than ``above`` [m] below.
 
-    Each with its depth below the face [m]; and whether some place off the face has no top
-    within ``above`` (the pin goes deeper there). The places off the face are the landing
-    region less the outline grown by the pin's radius (nearer, the pin leans on the edge), in
-    the world; a top counts where its outline grown by the pin's radius meets what is left of
-    them, the highest first (the end stops on the first it meets). For a face whose normal is
-    not vertical none is found and every place may go deeper (module docstring).
+    The floor is every top at the level of the part's bottom (module docstring); each top
+    under a place off the face is given with its depth below the face [m], and whether some
+    place off the face has no floor under it within ``above`` (the pin goes deeper there). The
+    places off the face are the reached region less the outline grown by the pin's radius
+    (nearer, the pin leans on the edge), in the world; a top is under a place when its outline
+    grown by the pin's radius covers it. For a face whose normal is not vertical, or a part
+    that is not an upright box, none is found and every place may go deeper.
     """
     surface = ctx.hole_shape.surface
     shape = ctx.graph.node(surface).shape
@@ -159,30 +160,19 @@ def support_landings(
     if not isinstance(ctx.graph.node(part).shape, BoxShape) or not _upright(bottom):
         return [], True
     floor = float(bottom.translation[2])  # where the part stands: its box frame's origin
+    depth = float(face.translation[2]) - floor
     radius = ctx.pin_shape.diameter / 2
     off = where.reached.difference(shapely.Polygon(shape.outline).buffer(radius))
-    if off.is_empty:
-        return [], True  # only the edge is reached: the taper's case, or the hand's
+    if off.is_empty or depth >= above:
+        return [], True  # only the edge is reached (the taper's case), or the floor is deeper
     left = affinity.affine_transform(
         off,
         [*face.rotation[0, :2], *face.rotation[1, :2], *face.translation[:2]],
     )
-    found = []
-    for top in sorted(solid_tops(ctx), key=lambda t: -t.z):
-        if abs(top.z - floor) > _LEVEL:
-            continue  # only what the part stands on (module docstring)
-        depth = float(face.translation[2]) - top.z
-        if depth >= above:
-            break
-        reach = top.outline.buffer(radius)
-        if not reach.intersects(left):
-            continue
-        if depth > _LEVEL:  # a top at or above the face (the part's own) reads as a miss on it
-            found.append((top, depth))
-        left = left.difference(reach)
-        if left.is_empty:
-            break
-    return found, not left.is_empty
+    tops = [t for t in solid_tops(ctx) if abs(t.z - floor) <= _LEVEL]
+    reaches = [t.outline.buffer(radius) for t in tops]
+    found = [(t, depth) for t, reach in zip(tops, reaches, strict=True) if reach.intersects(left)]
+    return found, not left.difference(shapely.union_all(reaches)).is_empty
 
 
 def support_landing_problem(ctx: PlanContext, where: Landing) -> str | None:

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import coal
 import numpy as np
 import shapely
+from numpy.typing import NDArray
 from shapely import affinity
 
 from synth.strategies.context import PlanContext, end_from_hand
@@ -98,20 +99,13 @@ def reached_region(
     less the discs of radius ``capture`` about the earlier offsets; their union (face frame,
     [m]) lies within :func:`landing_region`. None for a strategy without a footprint.
     """
-    footprint = strategy.errors
-    if footprint is None:
+    attempts = _attempts(ctx, strategy)
+    if attempts is None:
         return None
-    errors = affinity.rotate(
-        shapely.box(-footprint.dx, -footprint.dy, footprint.dx, footprint.dy),
-        footprint.zeta,
-        origin=(0.0, 0.0),
-        use_radians=True,
-    )
-    face_from_hole = ctx.graph.relative(ctx.hole_shape.surface, ctx.hole_frame)
-    to_face = face_from_hole.rotation[:2, :2]
-    origin = face_from_hole.translation[:2]
+    box, to_face, origin, offsets = attempts
+    errors = shapely.Polygon(box.T)  # F, in the hole frame
     places = []
-    for x, y in [(0.0, 0.0), *search_offsets(strategy)]:
+    for x, y in offsets:
         if not errors.is_empty:
             # o − E: E turned half a turn about the origin, moved to o
             turned = affinity.scale(errors, -1.0, -1.0, origin=(0.0, 0.0))
@@ -126,6 +120,29 @@ def landing_region(ctx: PlanContext, strategy: PinInHoleStrategy) -> shapely.Geo
 
     None for a strategy without a footprint.
     """
+    attempts = _attempts(ctx, strategy)
+    if attempts is None:
+        return None
+    box, to_face, origin, offsets = attempts
+    places = []
+    for x, y in offsets:
+        corners = origin[:, None] + to_face @ (np.array([[x], [y]]) - box)
+        places.append(shapely.Polygon(corners.T))
+    return shapely.union_all(places)
+
+
+_Attempts = tuple[
+    NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], list[tuple[float, float]]
+]
+
+
+def _attempts(ctx: PlanContext, strategy: PinInHoleStrategy) -> _Attempts | None:
+    """What the places are made of, or None without a footprint.
+
+    The footprint's corners (columns, ±dx × ±dy turned by ζ, hole frame [m]), the hole frame's
+    turn and origin in the face frame, and the attempts' offsets in order (the first attempt's,
+    0, then the search's).
+    """
     footprint = strategy.errors
     if footprint is None:
         return None
@@ -136,13 +153,8 @@ def landing_region(ctx: PlanContext, strategy: PinInHoleStrategy) -> shapely.Geo
         [[-footprint.dx, footprint.dx, footprint.dx, -footprint.dx],
          [-footprint.dy, -footprint.dy, footprint.dy, footprint.dy]]
     )  # fmt: skip
-    to_face = face_from_hole.rotation[:2, :2]
-    origin = face_from_hole.translation[:2]
-    places = []
-    for x, y in [(0.0, 0.0), *search_offsets(strategy)]:
-        corners = origin[:, None] + to_face @ (np.array([[x], [y]]) - box)
-        places.append(shapely.Polygon(corners.T))
-    return shapely.union_all(places)
+    offsets = [(0.0, 0.0), *search_offsets(strategy)]
+    return box, face_from_hole.rotation[:2, :2], face_from_hole.translation[:2], offsets
 
 
 def hand_height_above_end(ctx: PlanContext, grasp: Grasp) -> float:

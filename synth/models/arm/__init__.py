@@ -137,12 +137,9 @@ __all__ = [
 ]
 
 
-def _override(values: tuple[float, ...] | None, n: int, field: str) -> np.ndarray | None:
-    if values is None:
-        return None
-    if len(values) != n:
-        raise ArmModelError(f"{len(values)} values for {n} joints", f"manipulator.arm.{field}")
-    return np.array(values)
+def _override(values: tuple[float, ...] | None) -> np.ndarray | None:
+    """A rate override as an array (its length checked by :func:`check_rates`)."""
+    return None if values is None else np.array(values)
 
 
 def check_rates(arm_spec: ArmSpec, limits: JointLimits) -> None:
@@ -238,11 +235,10 @@ def load_arm(
     if arm_spec.model == "stanford":
         arm = build_stanford_arm(hand_spec, base, tool_offset=offset)
         check_rates(arm_spec, arm.limits)
-        n = arm.nq
         rates = {
-            "velocity": _override(arm_spec.velocity_limits, n, "velocity_limits"),
-            "acceleration": _override(arm_spec.acceleration_limits, n, "acceleration_limits"),
-            "jerk": _override(arm_spec.jerk_limits, n, "jerk_limits"),
+            "velocity": _override(arm_spec.velocity_limits),
+            "acceleration": _override(arm_spec.acceleration_limits),
+            "jerk": _override(arm_spec.jerk_limits),
         }
         if all(v is None for v in rates.values()):
             return arm
