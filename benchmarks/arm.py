@@ -32,7 +32,7 @@ from synth.models.arm import (
     solve_ik,
     swept_segment,
 )
-from synth.models.spec import ArmSpec, HandSpec
+from synth.models.manipulator import ArmSpec, HandSpec
 
 
 def environment(plate_x: float) -> list[tuple[str, coal.CollisionGeometry, pin.SE3]]:

@@ -61,7 +61,8 @@ from synth.exceptions import SynthError  # noqa: E402
 from synth.models.arm import Arm, dexterity, manipulator_arm  # noqa: E402
 from synth.models.graph import AttributeGraph, pose_to_se3  # noqa: E402
 from synth.models.loader import load_task, validate_task  # noqa: E402
-from synth.models.spec import Pose, TaskSpec  # noqa: E402
+from synth.models.spec import TaskSpec  # noqa: E402
+from synth.models.spec_fields import Pose  # noqa: E402
 from synth.pipeline import SynthesisOptions, synthesize  # noqa: E402
 from synth.replay import replay_program  # noqa: E402
 from synth.replay.proof import ProofOptions  # noqa: E402

@@ -8,7 +8,8 @@ from pathlib import Path
 from _paths import TASKS
 
 from synth.models.loader import load_task
-from synth.models.spec import Pose, TaskSpec
+from synth.models.spec import TaskSpec
+from synth.models.spec_fields import Pose
 from synth.pipeline import Synthesis, SynthesisOptions, synthesize
 from synth.replay.proof import ProofOptions
 

@@ -14,7 +14,7 @@ import trimesh
 
 from synth.exceptions import ArmModelError
 from synth.models.arm import CollisionScene, HeldObject, build_stanford_arm, grasp_contacts
-from synth.models.spec import HandSpec
+from synth.models.manipulator import HandSpec
 from synth.units import CM
 
 HAND = HandSpec()

@@ -9,7 +9,7 @@ import pytest
 
 from synth.exceptions import NoSolutionFound
 from synth.models.arm import IKOptions, build_ik, build_stanford_arm, solve_ik, solve_ik_all
-from synth.models.spec import HandSpec
+from synth.models.manipulator import HandSpec
 
 
 @pytest.fixture(scope="module")

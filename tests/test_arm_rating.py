@@ -17,7 +17,7 @@ from synth.models.arm import (
     build_stanford_arm,
     rank_solutions,
 )
-from synth.models.spec import HandSpec
+from synth.models.manipulator import HandSpec
 from synth.units import DEG
 
 

@@ -39,8 +39,8 @@ from synth.models.believed import believed_graph
 from synth.models.catalog import BUILTIN_ARMS, ROBOTS_EXTRA
 from synth.models.graph import pose_to_se3
 from synth.models.loader import load_task
+from synth.models.manipulator import ArmSpec, HandSpec, ManipulatorSpec
 from synth.models.park import nominal_environment, park_configuration
-from synth.models.spec import ArmSpec, HandSpec, ManipulatorSpec
 from synth.replay.run import replay_context
 from synth.strategies.context import plan_context
 

@@ -22,7 +22,7 @@ from synth.models.arm import (
 )
 from synth.models.arm.stanford import STANFORD_PARAMETERS_PATH, THETA5, build_stanford_model
 from synth.models.loader import load_task
-from synth.models.spec import ArmSpec, HandSpec
+from synth.models.manipulator import ArmSpec, HandSpec
 from synth.units import CM, DEG, INCH
 
 P = load_stanford_parameters()

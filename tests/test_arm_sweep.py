@@ -20,7 +20,7 @@ from synth.models.arm import (
     swept_segment,
     swept_trajectory,
 )
-from synth.models.spec import HandSpec
+from synth.models.manipulator import HandSpec
 
 DOWN = pin.utils.rotate("y", math.pi)
 SPIN = pin.utils.rotate("z", math.pi / 2)  # fingers side by side across the motion

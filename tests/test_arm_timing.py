@@ -19,7 +19,7 @@ from synth.models.arm import (
     plan_trajectory,
     seed_motion_time,
 )
-from synth.models.spec import HandSpec
+from synth.models.manipulator import HandSpec
 
 
 @pytest.fixture(scope="module")

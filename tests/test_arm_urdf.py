@@ -20,7 +20,7 @@ from synth.models.arm import (
     solve_ik,
 )
 from synth.models.catalog import ROBOTS_EXTRA
-from synth.models.spec import ArmSpec, HandSpec
+from synth.models.manipulator import ArmSpec, HandSpec
 
 ROBOTS = example_robot_data_dir()
 

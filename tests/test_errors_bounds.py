@@ -17,7 +17,7 @@ from synth.errors.parameters import ParameterBlock, ParameterSpace
 from synth.errors.taylor import TaylorModel, rotation_remainder
 from synth.models.graph import AttributeGraph
 from synth.models.loader import parse_task
-from synth.models.spec import Uncertainty
+from synth.models.uncertainty import Uncertainty
 
 COUPLED = """\
 name: coupled

@@ -15,7 +15,8 @@ from _paths import SEED_TASK
 
 from synth.errors.estimate import RelationModel
 from synth.models.loader import load_task
-from synth.models.spec import HandSpec, PinShape
+from synth.models.manipulator import HandSpec
+from synth.models.spec import PinShape
 from synth.report import al_trans
 from synth.strategies import PlanOptions
 from synth.strategies.approach import plan_approach

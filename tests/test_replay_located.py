@@ -41,7 +41,7 @@ from synth.exceptions import SpecError
 from synth.models.believed import believed_graph
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task
-from synth.models.spec import Uncertainty
+from synth.models.uncertainty import Uncertainty
 from synth.replay.located import ContactPlacement, located_objects
 from synth.replay.run import replay_context, replay_graph, replay_program, run_world, trial_seed
 from synth.replay.truth import HandErrors, error_parameters, sample_world

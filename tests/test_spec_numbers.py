@@ -210,6 +210,27 @@ def test_friction_lies_in_the_range_of_engineering_materials(value: float, ok: b
         assert error.path == "insertion.friction" and f"μ = {value:g} is above 2" in error.detail
 
 
+@pytest.mark.parametrize(
+    ("section", "field", "text"),
+    [
+        ("insertion", "friction", "0.3"),
+        ("insertion", "friction", "30%"),
+        ("proof", "min_success", "0.99"),
+        ("proof", "trials", "200"),
+        ("proof", "trials", 200.5),
+    ],
+)
+def test_plain_numbers_are_numbers_not_text(section: str, field: str, text: object) -> None:
+    # μ, a success rate and a trial count carry no unit, so YAML writes them as numbers; quoted
+    # text is a slip (a percentage, a unit, a spreadsheet's paste) and was read as its number
+    data = seed()
+    data.setdefault(section, {})[field] = text
+    error = refused(data)
+    assert error.path == f"{section}.{field}"
+    data[section][field] = 200 if field == "trials" else 0.5
+    validate_task(data)
+
+
 def test_constraint_coefficients_are_quantities_not_expressions() -> None:
     data = seed()
     _, box = frame(data, "box")

@@ -34,7 +34,7 @@ one piece per estimate this is the seed's single relaxation. Every reported boun
 outwards by ``pad``.
 
 :func:`derive_link` turns one estimate into a nominal pose and an
-:class:`~synth.models.spec.Uncertainty` (bounds plus coupled linear constraints) — the same
+:class:`~synth.models.uncertainty.Uncertainty` (bounds plus coupled linear constraints) — the same
 input the error chains take from a hand-typed block; :func:`resolve_contacts` does so for a
 task, and :func:`located_graph` is the hook :func:`synth.errors.chain.chain_between` calls.
 """
@@ -58,7 +58,9 @@ from synth.exceptions import EstimationError
 from synth.models.contacts import ContactSpec
 from synth.models.features import contact_groups
 from synth.models.graph import AttributeGraph
-from synth.models.spec import Pose, TaskSpec, Uncertainty
+from synth.models.spec import TaskSpec
+from synth.models.spec_fields import Pose
+from synth.models.uncertainty import Uncertainty
 
 _HIGHS = {"primal_feasibility_tolerance": 1e-10, "dual_feasibility_tolerance": 1e-10}
 _ROT_PARAMS = ("rx", "ry", "rz")

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from synth.exceptions import SpecError
-from synth.models.spec import PARAMS, Uncertainty
+from synth.models.uncertainty import PARAMS, Uncertainty
 
 SAMPLE_BUDGET = 100_000
 """Draws within the bounds after which :meth:`ParameterSpace.sample` judges its acceptance:

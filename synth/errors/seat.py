@@ -45,18 +45,13 @@ from pinocchio import rpy as pin_rpy
 
 from synth.models.graph import AttributeGraph
 from synth.models.insertion import derive
-from synth.models.spec import (
+from synth.models.spec import WORLD, HoleShape, InsertionSpec, PinShape, TaskSpec
+from synth.models.spec_fields import Pose, Rotation
+from synth.models.uncertainty import (
     ROTATION_PARAMS,
     TRANSLATION_PARAMS,
-    WORLD,
     Bound,
-    HoleShape,
-    InsertionSpec,
     LinearConstraint,
-    PinShape,
-    Pose,
-    Rotation,
-    TaskSpec,
     Uncertainty,
 )
 

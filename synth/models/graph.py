@@ -17,7 +17,9 @@ import numpy as np
 import pinocchio as pin
 
 from synth.exceptions import FrameLookupError
-from synth.models.spec import WORLD, FrameSpec, Pose, Shape, TaskSpec, Uncertainty
+from synth.models.spec import WORLD, FrameSpec, Shape, TaskSpec
+from synth.models.spec_fields import Pose
+from synth.models.uncertainty import Uncertainty
 
 _AXES = {
     "x": np.array([1.0, 0.0, 0.0]),

@@ -20,16 +20,8 @@ from synth.models.features import check_contacts
 from synth.models.graph import AttributeGraph
 from synth.models.jamming import fit_problem
 from synth.models.meshes import hole_problem
-from synth.models.spec import (
-    PARAMS,
-    WORLD,
-    FrameSpec,
-    HoleShape,
-    InsertionSpec,
-    PinShape,
-    TaskSpec,
-    Uncertainty,
-)
+from synth.models.spec import WORLD, FrameSpec, HoleShape, InsertionSpec, PinShape, TaskSpec
+from synth.models.uncertainty import PARAMS, Uncertainty
 from synth.models.yamlread import (
     DEFAULT_LIMITS,
     PathKey,

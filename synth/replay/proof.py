@@ -50,7 +50,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
-from synth.models.spec import Distribution, TaskSpec
+from synth.models.spec import TaskSpec
+from synth.models.uncertainty import Distribution
 from synth.replay.machine import ReplayOptions
 from synth.replay.report import MonteCarloReport, RunReport, wilson_interval
 from synth.replay.run import replay_context, run_nominal, summarise, trial_errors

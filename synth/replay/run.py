@@ -49,7 +49,8 @@ from synth.models.believed import believed_graph
 from synth.models.graph import AttributeGraph, pose_to_se3
 from synth.models.loader import load_task
 from synth.models.park import nominal_environment, park_configuration
-from synth.models.spec import Distribution, TaskSpec
+from synth.models.spec import TaskSpec
+from synth.models.uncertainty import Distribution
 from synth.models.workcell import WorkcellModel
 from synth.replay.machine import ReplayMachine, ReplayOptions, ViolationStop
 from synth.replay.report import MonteCarloReport, Outcome, ReplayReport, RunReport

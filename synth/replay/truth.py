@@ -48,7 +48,8 @@ import pinocchio as pin
 
 from synth.errors.parameters import ParameterBlock, ParameterSpace
 from synth.models.graph import AttributeGraph
-from synth.models.spec import WORLD, Uncertainty
+from synth.models.spec import WORLD
+from synth.models.uncertainty import Uncertainty
 from synth.replay.located import located_objects
 
 __all__ = [

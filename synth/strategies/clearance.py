@@ -76,7 +76,8 @@ from synth.models.arm import (
 from synth.models.arm.bodies import bounding_radius
 from synth.models.arm.sweep import Displacement, LinkDisplacement
 from synth.models.graph import AttributeGraph
-from synth.models.spec import WORLD, Uncertainty
+from synth.models.spec import WORLD
+from synth.models.uncertainty import Uncertainty
 from synth.models.workcell import TABLE, NominalPoses, PinModel, WorkcellModel
 from synth.strategies.records import Grasp
 

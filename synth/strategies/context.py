@@ -31,8 +31,10 @@ from synth.models.arm import (
 from synth.models.believed import believed_graph
 from synth.models.graph import AttributeGraph, pose_to_se3
 from synth.models.insertion import InsertionParameters, derive, refuse_unprovable
+from synth.models.manipulator import HandSpec
 from synth.models.park import nominal_environment, park_configuration
-from synth.models.spec import HandSpec, HoleShape, PinShape, TaskSpec, Uncertainty
+from synth.models.spec import HoleShape, PinShape, TaskSpec
+from synth.models.uncertainty import Uncertainty
 from synth.models.world import Fact, World
 from synth.strategies.clearance import GrossMotionCheck
 from synth.strategies.hypotheses import At, HandError, Holding, InHole, Task, Uncertain

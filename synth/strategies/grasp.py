@@ -41,7 +41,8 @@ from synth.errors.chain import ErrorChain, Fixed, Perturbation, Term
 from synth.errors.estimate import RelationModel, estimate_errors
 from synth.errors.parameters import ParameterBlock
 from synth.models.arm import grasp_rating
-from synth.models.spec import HandSpec, PinShape
+from synth.models.manipulator import HandSpec
+from synth.models.spec import PinShape
 from synth.models.world import World
 from synth.strategies.context import Configuration, PinEnd, PlanContext, hand_at
 from synth.strategies.hypotheses import Affixed, At, GraspDetermination, Holding

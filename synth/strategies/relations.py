@@ -28,7 +28,8 @@ import pinocchio as pin
 from synth.errors.chain import ErrorChain, Fixed, Perturbation, Term
 from synth.errors.parameters import ParameterBlock, ParameterSpace
 from synth.models.graph import AttributeGraph
-from synth.models.spec import WORLD, Uncertainty
+from synth.models.spec import WORLD
+from synth.models.uncertainty import Uncertainty
 from synth.models.world import World
 from synth.strategies.context import PlanContext
 from synth.strategies.hypotheses import Affixed, ApproachStandoff, GraspDetermination

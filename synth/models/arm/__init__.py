@@ -72,7 +72,8 @@ from synth.models.arm.timing import (
 from synth.models.arm.urdf import example_robot_data_dir, load_urdf_arm
 from synth.models.catalog import BUILTIN_ARMS
 from synth.models.graph import pose_to_se3
-from synth.models.spec import RATE_FIELDS, ArmSpec, HandSpec, ManipulatorSpec, TaskSpec
+from synth.models.manipulator import RATE_FIELDS, ArmSpec, HandSpec, ManipulatorSpec
+from synth.models.spec import TaskSpec
 
 __all__ = [
     "FINGERS",

@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from synth.models.arm.bodies import Body
 from synth.models.arm.limits import JointLimits
-from synth.models.spec import HandSpec
+from synth.models.manipulator import HandSpec
 
 
 class ClosedFormInverse(Protocol):

@@ -6,7 +6,7 @@ links' collision shapes become the bodies ``finger_left`` / ``finger_right``, th
 ``palm``, each merged into one mesh in AL's hand frame (origin between the pads, z the approach,
 fingers closing along x). The collision scene opens them along x like the parametric fingers.
 
-The :class:`~synth.models.spec.HandSpec` the planner and the replay reason with is read off
+The :class:`~synth.models.manipulator.HandSpec` the planner and the replay reason with is read off
 those shapes, in the hand frame, with the finger joints at 0:
 
 * ``max_opening`` = gap₀ + Σ upper limits of the finger joints (both slide outwards; gap₀ is the
@@ -35,7 +35,7 @@ from numpy.typing import NDArray
 from synth.exceptions import ArmModelError
 from synth.models.arm.bodies import Body
 from synth.models.arm.hand import FINGERS, PALM
-from synth.models.spec import HandSpec
+from synth.models.manipulator import HandSpec
 
 _CENTRE_TOLERANCE = 1e-3  # [m] hand origin to the pads' centre
 _AXIS_TOLERANCE = 1e-3  # [1] finger travel off the hand's x

@@ -19,7 +19,7 @@ import numpy as np
 import pinocchio as pin
 
 from synth.models.arm.bodies import Body
-from synth.models.spec import HandSpec
+from synth.models.manipulator import HandSpec
 
 FINGERS: tuple[str, str] = ("finger_left", "finger_right")
 PALM = "palm"

@@ -27,7 +27,7 @@ from synth.models.arm.hand import palm_top
 from synth.models.arm.ur import ur_inverse
 from synth.models.arm.urdf import example_robot_data_dir, load_urdf_arm
 from synth.models.catalog import BUILTIN_ARMS, ROBOTS_EXTRA
-from synth.models.spec import HandSpec
+from synth.models.manipulator import HandSpec
 
 FIELD = "manipulator.arm.model"
 

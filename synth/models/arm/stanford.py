@@ -39,7 +39,8 @@ from synth.models.arm.bodies import Body, box_at, cylinder_along
 from synth.models.arm.hand import hand_bodies, palm_top
 from synth.models.arm.limits import JointKind, JointLimits
 from synth.models.graph import pose_to_se3
-from synth.models.spec import HandSpec, Pose
+from synth.models.manipulator import HandSpec
+from synth.models.spec_fields import Pose
 from synth.models.yamlread import read_yaml
 from synth.units import parse_quantity, rate_si
 

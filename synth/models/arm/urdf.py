@@ -23,7 +23,7 @@ from synth.models.arm.bodies import Body
 from synth.models.arm.fingers import FingerJoint, urdf_hand
 from synth.models.arm.hand import hand_bodies
 from synth.models.arm.limits import JointKind, JointLimits
-from synth.models.spec import HandSpec
+from synth.models.manipulator import HandSpec
 
 DEFAULT_ACCELERATION_TIME: float = 0.25
 """[s] Assumed time to reach full speed when a URDF arm has no acceleration limits (the same
