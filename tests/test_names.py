@@ -18,6 +18,8 @@ import yaml
 from _paths import SEED_TASK
 
 from synth.al import interpreter as interpreter_module
+from synth.al.builtins import BUILTINS
+from synth.al.builtins import CONSTANTS as VALUE_CONSTANTS
 from synth.al.names import (
     ARM_NAMES,
     CONSTANTS,
@@ -28,8 +30,6 @@ from synth.al.names import (
     al_name_problem,
 )
 from synth.al.parser import grammar_keywords
-from synth.al.values import BUILTINS
-from synth.al.values import CONSTANTS as VALUE_CONSTANTS
 from synth.cli import main
 from synth.exceptions import SpecError
 from synth.models.loader import validate_task

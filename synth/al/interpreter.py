@@ -110,6 +110,7 @@ import numpy as np
 import pinocchio as pin
 
 from synth.al import ast
+from synth.al.builtins import CONSTANTS, call_builtin
 from synth.al.frames import (
     Affixment,
     FrameError,
@@ -138,7 +139,6 @@ from synth.al.machine import (
 )
 from synth.al.names import ARM_NAMES, KEYWORDS
 from synth.al.values import (
-    CONSTANTS,
     FORCE,
     LENGTH,
     TIME,
@@ -151,7 +151,6 @@ from synth.al.values import (
     Value,
     Vector,
     binary,
-    call_builtin,
     coerce,
     compare,
     describe,

@@ -11,10 +11,10 @@ called ``TRUE``, ``ROT(ZHAT, …)`` turning about the hand):
 
 - :data:`KEYWORDS`: statement keywords, type names, clause words (``ARRIVAL``, ``DURATION``),
   the sensed quantities (``FORCE``, ``TORQUE``, ``OPENING``);
-- :data:`FUNCTIONS`: the interpreter's builtins (:data:`synth.al.values.BUILTINS`);
-- :data:`UNITS`: the unit constants (:data:`synth.al.values.UNITS`: ``CM``, ``INCHES``, ``DEG``…);
+- :data:`FUNCTIONS`: the interpreter's builtins (:data:`synth.al.builtins.BUILTINS`);
+- :data:`UNITS`: the unit constants (:data:`synth.al.builtins.UNITS`: ``CM``, ``INCHES``, ``DEG``…);
 - :data:`CONSTANTS`: the other predeclared constants (``TRUE``, ``FALSE``, ``XHAT``, ``ZHAT``,
-  ``NILROTN``, ``NILTRANS``…, :data:`synth.al.values.CONSTANTS`) and AL's ``PI``, ``STATION``,
+  ``NILROTN``, ``NILTRANS``…, :data:`synth.al.builtins.CONSTANTS`) and AL's ``PI``, ``STATION``,
   ``NILDEPROACH`` (al-language.md §4: EX74, MOT74);
 - :data:`ARM_NAMES`, :data:`OTHER_ARM_NAMES`, :data:`PARK_NAMES`: the arms' hand frames and
   parks.
@@ -32,9 +32,9 @@ from __future__ import annotations
 import re
 from typing import Literal
 
-from synth.al.values import BUILTINS
-from synth.al.values import CONSTANTS as _CONSTANT_VALUES
-from synth.al.values import UNITS as _UNIT_VALUES
+from synth.al.builtins import BUILTINS
+from synth.al.builtins import CONSTANTS as _CONSTANT_VALUES
+from synth.al.builtins import UNITS as _UNIT_VALUES
 
 __all__ = [
     "ARM_NAMES",

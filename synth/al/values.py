@@ -65,17 +65,13 @@ Everything else — ``FRAME + SCALAR``, ``f * f``, ``r * f``, ``v * v``, ``s + v
 :class:`OperandError`, which the interpreter turns into an
 :class:`~synth.exceptions.ALRuntimeError` at the operator's AL line.
 
-**Builtins** (:data:`BUILTINS`): ``ROT(axis, angle)`` = ``ROTN`` (the axis is normalised;
-S:2723 writes ``VECTOR(.924,.383,.001)``), ``TRANS(r, v)``, ``FRAME(r, v)``,
-``VECTOR(x, y, z)``, ``INV(f | t | r)`` (frame and trans → trans), ``ORIENT(f)`` → r,
-``DISPL(f)`` = ``POS(f)`` → v, ``ABS``, ``SQRT``, ``SIN``, ``COS``, ``TAN``, ``ATAN2(y, x)``.
-``FORCE``, ``TORQUE`` and ``OPENING`` read sensors and live in the interpreter.
+**Builtins and predeclared names** live in :mod:`synth.al.builtins`.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Literal, TypeAlias
 
@@ -83,19 +79,16 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
-from synth.units import CM, DEG, INCH, OZ
+from synth.units import CM, OZ
 
 __all__ = [
     "ANGLE",
     "BARE_UNITS",
-    "BUILTINS",
-    "CONSTANTS",
     "DIMENSIONLESS",
     "FORCE",
     "LENGTH",
     "TIME",
     "TORQUE",
-    "UNITS",
     "Event",
     "Exponents",
     "OperandError",
@@ -106,14 +99,15 @@ __all__ = [
     "Value",
     "Vector",
     "binary",
-    "call_builtin",
     "coerce",
     "coerce_vector",
     "compare",
     "describe",
+    "length_of",
     "magnitude",
-    "rotation_about",
+    "scalar_pair",
     "type_name",
+    "typed",
     "unary",
 ]
 
@@ -295,7 +289,7 @@ def type_name(value: Value) -> str:
     raise TypeError(f"not an AL value: {value!r}")
 
 
-def _typed(value: Value) -> str:
+def typed(value: Value) -> str:
     """``a frame``, ``a length scalar``: the operand as named in error messages."""
     name = type_name(value)
     if isinstance(value, Scalar | Vector) and not value.dim.dimensionless:
@@ -376,7 +370,8 @@ def _common(a: Exponents, b: Exponents, op: str) -> Exponents:
     raise OperandError(f"cannot apply '{op}' to a {a.name} and a {b.name}")
 
 
-def _scalar_pair(a: Scalar, b: Scalar, op: str) -> tuple[float, float, Exponents]:
+def scalar_pair(a: Scalar, b: Scalar, op: str) -> tuple[float, float, Exponents]:
+    """Both scalars' values [SI] in their common dimension (bare numbers adapt), and it."""
     dim = _common(a.dim, b.dim, op)
     return coerce(a, dim).value, coerce(b, dim).value, dim
 
@@ -388,7 +383,8 @@ def _vector_pair(
     return coerce_vector(a, dim).value, coerce_vector(b, dim).value, dim
 
 
-def _length(v: Vector, what: str) -> NDArray[np.float64]:
+def length_of(v: Vector, what: str) -> NDArray[np.float64]:
+    """The vector as a length [m] (a bare vector is read in cm); ``what`` names it in errors."""
     return coerce_vector(v, LENGTH, what).value
 
 
@@ -398,7 +394,7 @@ def _length(v: Vector, what: str) -> NDArray[np.float64]:
 
 def _translate(pose: Pose, vector: Vector, sign: float) -> Pose:
     moved = pin.SE3(pose.se3)
-    moved.translation = pose.se3.translation + sign * _length(vector, "a frame's offset")
+    moved.translation = pose.se3.translation + sign * length_of(vector, "a frame's offset")
     return Pose(moved, pose.kind)
 
 
@@ -419,7 +415,7 @@ def _mul(a: Value, b: Value) -> Value:
     if isinstance(a, Rotation) and isinstance(b, Vector):
         return Vector(a.matrix @ b.value, b.dim)
     if isinstance(a, Pose) and isinstance(b, Vector):
-        return Vector(a.se3.act(_length(b, "a point mapped by a frame")), LENGTH)
+        return Vector(a.se3.act(length_of(b, "a point mapped by a frame")), LENGTH)
     if isinstance(a, Pose) and isinstance(b, Pose):
         if a.kind == "frame" and b.kind == "frame":
             raise OperandError(
@@ -428,7 +424,7 @@ def _mul(a: Value, b: Value) -> Value:
             )
         kind: PoseKind = "frame" if (a.kind, b.kind) == ("frame", "trans") else "trans"
         return Pose(a.se3 * b.se3, kind)
-    raise OperandError(f"cannot multiply {_typed(a)} by {_typed(b)}")
+    raise OperandError(f"cannot multiply {typed(a)} by {typed(b)}")
 
 
 def _div(a: Value, b: Value) -> Value:
@@ -439,13 +435,13 @@ def _div(a: Value, b: Value) -> Value:
             return Scalar(a.value / b.value, a.dim / b.dim)
         if isinstance(a, Vector):
             return Vector(a.value / b.value, a.dim / b.dim)
-    raise OperandError(f"cannot divide {_typed(a)} by {_typed(b)}")
+    raise OperandError(f"cannot divide {typed(a)} by {typed(b)}")
 
 
 def _add(a: Value, b: Value, sign: float) -> Value:
     op = "+" if sign > 0 else "-"
     if isinstance(a, Scalar) and isinstance(b, Scalar):
-        x, y, dim = _scalar_pair(a, b, op)
+        x, y, dim = scalar_pair(a, b, op)
         return Scalar(x + sign * y, dim)
     if isinstance(a, Vector) and isinstance(b, Vector):
         u, w, dim = _vector_pair(a, b, op)
@@ -457,14 +453,14 @@ def _add(a: Value, b: Value, sign: float) -> Value:
     if isinstance(a, Pose) and isinstance(b, Rotation):
         return _turn(a, b, sign)
     verb, joint = ("add", "to") if sign > 0 else ("subtract", "from")
-    raise OperandError(f"cannot {verb} {_typed(b)} {joint} {_typed(a)}")
+    raise OperandError(f"cannot {verb} {typed(b)} {joint} {typed(a)}")
 
 
 def _dot(a: Value, b: Value) -> Value:
     if isinstance(a, Vector) and isinstance(b, Vector):
         return Scalar(float(a.value @ b.value), a.dim * b.dim)
     raise OperandError(
-        f"the dot product needs two vectors, not {_typed(a)} and {_typed(b)}"
+        f"the dot product needs two vectors, not {typed(a)} and {typed(b)}"
         + (" (use DISPL(frame) for a frame's position)" if isinstance(b, Pose) else "")
     )
 
@@ -472,7 +468,7 @@ def _dot(a: Value, b: Value) -> Value:
 def _logic(a: Value, b: Value, op: str) -> Value:
     if isinstance(a, bool) and isinstance(b, bool):
         return (a and b) if op == "AND" else (a or b)
-    raise OperandError(f"{op} needs two booleans, not {_typed(a)} and {_typed(b)}")
+    raise OperandError(f"{op} needs two booleans, not {typed(a)} and {typed(b)}")
 
 
 def binary(op: str, left: Value, right: Value) -> Value:
@@ -497,12 +493,12 @@ def unary(op: str, operand: Value) -> Value:
     if op == "NOT":
         if isinstance(operand, bool):
             return not operand
-        raise OperandError(f"NOT needs a boolean, not {_typed(operand)}")
+        raise OperandError(f"NOT needs a boolean, not {typed(operand)}")
     if isinstance(operand, Scalar):
         return operand if op == "+" else Scalar(-operand.value, operand.dim)
     if isinstance(operand, Vector):
         return operand if op == "+" else Vector(-operand.value, operand.dim)
-    raise OperandError(f"unary '{op}' needs a scalar or a vector, not {_typed(operand)}")
+    raise OperandError(f"unary '{op}' needs a scalar or a vector, not {typed(operand)}")
 
 
 _RELATIONS: dict[str, Callable[[float, float], bool]] = {
@@ -524,11 +520,11 @@ def compare(op: str, left: Value, right: Value) -> bool:
     if op not in _RELATIONS:
         raise OperandError(f"unknown relation {op!r}")
     if isinstance(left, Scalar) and isinstance(right, Scalar):
-        x, y, _ = _scalar_pair(left, right, op)
+        x, y, _ = scalar_pair(left, right, op)
         return _RELATIONS[op](x, y)
     if isinstance(left, bool) and isinstance(right, bool) and op in ("=", "≠"):
         return (left == right) == (op == "=")
-    raise OperandError(f"cannot compare {_typed(left)} with {_typed(right)} by '{op}'")
+    raise OperandError(f"cannot compare {typed(left)} with {typed(right)} by '{op}'")
 
 
 def magnitude(value: Value) -> Scalar:
@@ -539,182 +535,4 @@ def magnitude(value: Value) -> Scalar:
         return Scalar(float(np.linalg.norm(value.value)), value.dim)
     if isinstance(value, Rotation):
         return Scalar(float(np.linalg.norm(pin.log3(value.matrix))), ANGLE)
-    raise OperandError(f"|x| needs a scalar, vector or rotation, not {_typed(value)}")
-
-
-# --------------------------------------------------------------------------------------------
-# Builtins
-
-
-def _arity(name: str, args: Sequence[Value], n: int) -> None:
-    if len(args) != n:
-        raise OperandError(f"{name} takes {n} argument{'s' if n != 1 else ''}, not {len(args)}")
-
-
-def _want(name: str, value: Value, kind: type | tuple[type, ...], what: str) -> None:
-    if not isinstance(value, kind) or isinstance(value, bool):
-        raise OperandError(f"{name} needs {what}, not {_typed(value)}")
-
-
-def rotation_about(axis: ArrayLike, angle: float) -> Rotation:
-    """Rotation by ``angle`` [rad] about ``axis`` (any non-zero vector; normalised)."""
-    a = np.asarray(axis, dtype=float)
-    norm = float(np.linalg.norm(a))
-    if not math.isfinite(norm) or norm < 1e-12:
-        raise OperandError("a rotation axis must be a non-zero vector")
-    return Rotation(pin.exp3(a / norm * angle))
-
-
-def _rot(name: str, args: Sequence[Value]) -> Value:
-    _arity(name, args, 2)
-    axis, angle = args
-    _want(name, axis, Vector, "an axis vector first")
-    _want(name, angle, Scalar, "an angle second")
-    assert isinstance(axis, Vector) and isinstance(angle, Scalar)
-    return rotation_about(axis.value, coerce(angle, ANGLE, f"the angle of {name}").value)
-
-
-def _pose(kind: PoseKind) -> Callable[[str, Sequence[Value]], Value]:
-    def build(name: str, args: Sequence[Value]) -> Value:
-        _arity(name, args, 2)
-        rot, vec = args
-        _want(name, rot, Rotation, "a rotation first")
-        _want(name, vec, Vector, "a vector second")
-        assert isinstance(rot, Rotation) and isinstance(vec, Vector)
-        return Pose(pin.SE3(rot.matrix, _length(vec, f"the vector of {name}")), kind)
-
-    return build
-
-
-def _vector(name: str, args: Sequence[Value]) -> Value:
-    _arity(name, args, 3)
-    for a in args:
-        _want(name, a, Scalar, "three scalars")
-    scalars = [a for a in args if isinstance(a, Scalar)]
-    dims = {s.dim for s in scalars if not s.dim.dimensionless}
-    if len(dims) > 1:
-        shown = ", ".join(sorted(d.name for d in dims))
-        raise OperandError(f"VECTOR components must share one dimension, not {shown}")
-    dim = dims.pop() if dims else DIMENSIONLESS
-    return Vector(np.array([coerce(s, dim).value for s in scalars]), dim)
-
-
-def _inv(name: str, args: Sequence[Value]) -> Value:
-    _arity(name, args, 1)
-    (x,) = args
-    if isinstance(x, Pose):
-        return Pose(x.se3.inverse(), "trans")
-    if isinstance(x, Rotation):
-        return Rotation(x.matrix.T)
-    raise OperandError(f"INV needs a frame, trans or rotation, not {_typed(x)}")
-
-
-def _orient(name: str, args: Sequence[Value]) -> Value:
-    _arity(name, args, 1)
-    (x,) = args
-    _want(name, x, Pose, "a frame or trans")
-    assert isinstance(x, Pose)
-    return Rotation(x.se3.rotation)
-
-
-def _displ(name: str, args: Sequence[Value]) -> Value:
-    _arity(name, args, 1)
-    (x,) = args
-    _want(name, x, Pose, "a frame or trans")
-    assert isinstance(x, Pose)
-    return Vector(x.se3.translation, LENGTH)
-
-
-def _scalar_fn(fn: Callable[[Scalar], Scalar]) -> Callable[[str, Sequence[Value]], Value]:
-    def call(name: str, args: Sequence[Value]) -> Value:
-        _arity(name, args, 1)
-        (x,) = args
-        _want(name, x, Scalar, "a scalar")
-        assert isinstance(x, Scalar)
-        return fn(x)
-
-    return call
-
-
-def _sqrt(x: Scalar) -> Scalar:
-    if x.value < 0:
-        raise OperandError("SQRT of a negative number")
-    return Scalar(math.sqrt(x.value), x.dim.sqrt())
-
-
-def _trig(fn: Callable[[float], float]) -> Callable[[Scalar], Scalar]:
-    return lambda x: Scalar(fn(coerce(x, ANGLE, "a trigonometric argument").value))
-
-
-def _atan2(name: str, args: Sequence[Value]) -> Value:
-    _arity(name, args, 2)
-    for a in args:
-        _want(name, a, Scalar, "two scalars")
-    y, x = args
-    assert isinstance(y, Scalar) and isinstance(x, Scalar)
-    yv, xv, _ = _scalar_pair(y, x, "ATAN2")
-    return Scalar(math.atan2(yv, xv), ANGLE)
-
-
-Builtin = Callable[[str, Sequence[Value]], Value]
-
-BUILTINS: dict[str, Builtin] = {
-    "ROT": _rot,
-    "ROTN": _rot,
-    "TRANS": _pose("trans"),
-    "FRAME": _pose("frame"),
-    "VECTOR": _vector,
-    "INV": _inv,
-    "ORIENT": _orient,
-    "DISPL": _displ,
-    "POS": _displ,
-    "ABS": _scalar_fn(lambda x: Scalar(abs(x.value), x.dim)),
-    "SQRT": _scalar_fn(_sqrt),
-    "SIN": _scalar_fn(_trig(math.sin)),
-    "COS": _scalar_fn(_trig(math.cos)),
-    "TAN": _scalar_fn(_trig(math.tan)),
-    "ATAN2": _atan2,
-}
-"""Pure functions by upper-case AL name (see the module docstring)."""
-
-
-def call_builtin(name: str, args: Sequence[Value]) -> Value:
-    """Call the builtin ``name`` (upper case) on evaluated ``args``."""
-    fn = BUILTINS.get(name)
-    if fn is None:
-        raise OperandError(f"unknown function {name}")
-    return fn(name, args)
-
-
-# --------------------------------------------------------------------------------------------
-# Predeclared constants
-
-UNITS: dict[str, Scalar] = {
-    "CM": Scalar(CM, LENGTH),
-    "MM": Scalar(0.001, LENGTH),
-    "INCHES": Scalar(INCH, LENGTH),
-    "INCH": Scalar(INCH, LENGTH),
-    "IN": Scalar(INCH, LENGTH),
-    "DEG": Scalar(DEG, ANGLE),
-    "DEGREES": Scalar(DEG, ANGLE),
-    "RAD": Scalar(1.0, ANGLE),
-    "SEC": Scalar(1.0, TIME),
-    "OZ": Scalar(OZ, FORCE),
-    "LBS": Scalar(16.0 * OZ, FORCE),
-    "GM": Scalar(0.001 * 9.80665, FORCE),
-}
-"""Unit constants (seed-al-subset.md §1, al-language.md §1); OZ, LBS and GM are forces."""
-
-CONSTANTS: dict[str, Value] = {
-    **UNITS,
-    "XHAT": Vector(np.array([1.0, 0.0, 0.0])),
-    "YHAT": Vector(np.array([0.0, 1.0, 0.0])),
-    "ZHAT": Vector(np.array([0.0, 0.0, 1.0])),
-    "NILVECT": Vector(np.array([0.0, 0.0, 0.0])),
-    "NILROTN": Rotation(np.eye(3)),
-    "NILROT": Rotation(np.eye(3)),
-    "NILTRANS": Pose(pin.SE3.Identity(), "trans"),
-    "TRUE": True,
-    "FALSE": False,
-}
-"""Predeclared read-only names (S:1223, S:1264, S:1338, S:2693)."""
+    raise OperandError(f"|x| needs a scalar, vector or rotation, not {typed(value)}")

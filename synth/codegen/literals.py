@@ -15,7 +15,7 @@ task names, and each maker checks its input (seed-al-subset.md §1, al-language.
 - **comments** are the text inside ``{ ... }``: braces become parentheses and control
   characters spaces, so no text can close a comment early or open one.
 
-Units are AL's (the interpreter's table, :data:`synth.al.values.UNITS`): ``CM`` = 0.01 m,
+Units are AL's (the interpreter's table, :data:`synth.al.builtins.UNITS`): ``CM`` = 0.01 m,
 ``DEG`` = π/180 rad, ``OZ`` = ounce-force, ``SEC`` = 1 s. Rotations are ``NILROTN``,
 ``ROT(ZHAT,θ*DEG)`` about a principal axis, or ``ROT(VECTOR(a,b,c),θ*DEG)`` with a unit axis
 (dimensionless, normalised by AL, S:2723).
