@@ -47,8 +47,10 @@ except in two cases:
   its two-point contact sticks (:mod:`synth.replay.wedging`, the task's friction) wedges there:
   a ``wedged`` violation;
 * *sliding*: a push meeting a surface at less than ``slide_angle`` (a pin lifted or lowered
-  beside a box) slides along it, the arm yielding along the normal until the path clears the
-  obstacle; needing more than ``compliance`` jams it (a contact).
+  beside a box) slides along it, the arm yielding along the normal by the least shift that
+  keeps the pin out of the obstacle (on a face, the plane it touched; past an edge, less) until
+  the path clears the obstacle; needing more than ``compliance`` jams it (a contact), and the
+  sliding pin meeting another solid (the table under a box's wall) stops there (a contact).
 
 **Force.** At a contact the force rises from 0 to the arm's stall force ``stall_force``,
 modelled as happening at that instant, in the direction opposite to the touching point's motion
@@ -232,8 +234,7 @@ class ReplayMachine(TimelineMachine[Motion]):
         commanded = reading * error * held.grip
         phase = segment.phase_at(s)
         if phase.slide is not None:
-            shift = phase.slide.deflection(commanded) * phase.slide.normal
-            pose = pin.SE3(commanded.rotation, commanded.translation + shift)
+            pose = phase.slide.yielded(commanded)
             sensed = pose * held.grip.inverse() * error.inverse()
             return MotionState(None, q, sensed, error, pose, None, 0.0, self._opening)
         hole = phase.hole

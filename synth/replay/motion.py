@@ -16,6 +16,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Literal, Protocol
 
+import coal
 import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
@@ -74,22 +75,76 @@ def quintic_inverse(s: float) -> float:
     return 0.5 * (lo + hi)
 
 
+_SHORT_OF_PLANE = 1e-5
+"""[m] how far short of the tangent plane's yield :meth:`Slide.deflection` tests the pin for
+still touching: along a face it does (it would be 10 µm into the face)."""
+
+_YIELD_BISECTIONS = 24
+"""Halvings of the yield past an edge: ≤ 1 cm / 2²⁴ < 1 nm."""
+
+
 @dataclass(frozen=True, eq=False)
 class Slide:
     """A pin sliding along ``obstacle``.
 
-    ``normal``: the surface normal (world, towards the pin); ``pin_point``: the pin's contact
-    point (pin frame) [m]; ``origin``: where that point was when the slide began (world) [m].
+    ``normal``: the surface normal (world, towards the pin) where it touched; ``pin_point``: the
+    pin's contact point (pin frame) [m]; ``origin``: where that point was when the slide began
+    (world) [m]; ``pin_geometry``: the pin's solid (pin frame), for the yield past an edge.
     """
 
     obstacle: Obstacle
     normal: NDArray[np.float64]
     pin_point: NDArray[np.float64]
     origin: NDArray[np.float64]
+    pin_geometry: coal.CollisionGeometry
 
     def deflection(self, pin_pose: pin.SE3) -> float:
-        """How far [m] the arm yields along the normal: δ = max(0, −n·(P x − x₀))."""
-        return max(0.0, -float(self.normal @ (pin_pose.act(self.pin_point) - self.origin)))
+        """How far [m] the arm yields along the normal n: the least δ ≥ 0 that keeps the pin out.
+
+        Along a face the contact point stays on the plane it touched, δ = max(0, −n·(P x − x₀)),
+        and a pin shifted by less is still in the face (tested 10 µm short of it). Where it
+        touched an edge, that tangent plane is not the obstacle's surface: a pin lowered past a
+        box's top edge would be pushed ever farther out by it and stall in the air beside the
+        box. There δ is the least shift along n that leaves the pin clear of the obstacle (at
+        most the plane's), by bisection on Coal's collision test.
+        """
+        plane = max(0.0, -float(self.normal @ (pin_pose.act(self.pin_point) - self.origin)))
+        if plane <= _SHORT_OF_PLANE or self._touches(pin_pose, plane - _SHORT_OF_PLANE):
+            return plane
+        if not self._touches(pin_pose, 0.0):
+            return 0.0
+        touching, clear = 0.0, plane - _SHORT_OF_PLANE
+        for _ in range(_YIELD_BISECTIONS):
+            middle = 0.5 * (touching + clear)
+            if self._touches(pin_pose, middle):
+                touching = middle
+            else:
+                clear = middle
+        return clear
+
+    def yielded(self, pin_pose: pin.SE3, deflection: float | None = None) -> pin.SE3:
+        """The commanded pin pose moved by the arm's yield along the normal.
+
+        ``deflection`` [m] is the yield when already known, else :meth:`deflection`'s.
+        """
+        shift = self.deflection(pin_pose) if deflection is None else deflection
+        return pin.SE3(pin_pose.rotation, pin_pose.translation + shift * self.normal)
+
+    def _touches(self, pin_pose: pin.SE3, shift: float) -> bool:
+        """Whether the pin, moved by ``shift`` [m] along the normal, overlaps the obstacle."""
+        moved = coal.Transform3s(pin_pose.rotation, pin_pose.translation + shift * self.normal)
+        placed = self.obstacle.pose
+        request, result = coal.CollisionRequest(), coal.CollisionResult()
+        return bool(
+            coal.collide(
+                self.pin_geometry,
+                moved,
+                self.obstacle.geometry,
+                coal.Transform3s(placed.rotation, placed.translation),
+                request,
+                result,
+            )
+        )
 
 
 @dataclass(frozen=True, eq=False)

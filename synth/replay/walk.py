@@ -12,7 +12,8 @@ the pin is stopped, if it is (:class:`~synth.replay.motion.Stop`):
   at the seat), leaves the mouth (free again) or is dragged sideways past the compliance (a
   ``collision`` violation: jammed);
 * *sliding* (:func:`~synth.replay.scrape.scrape`): until the path clears the surface (free
-  again) or the arm would have to yield more than the compliance (a stop: jammed).
+  again), the arm would have to yield more than the compliance (a stop: jammed) or the pin
+  meets another solid (a stop there).
 
 :func:`pin_speed` bounds how fast any point of the pin moves along a segment: the constant
 the contact search's conservative advancement divides distances by.
@@ -229,10 +230,8 @@ def walk_segment(
                 held.model,
                 commanded,
                 speed(),
-                current.obstacle,
-                current.normal,
-                current.pin_point,
-                current.origin,
+                current,
+                [o for o in obstacles if o is not current.obstacle],
                 start=s,
                 compliance=options.compliance,
                 clearance=options.contact_clearance,
@@ -250,6 +249,17 @@ def walk_segment(
                     commanded(slid.s).act(pin_point),
                     push_reaction(partial(point_on, commanded, pin_point), slid.s),
                     note=f"slid along it and jammed, {100 * slid.deflection:.2f} cm in",
+                )
+            elif slid.kind == "touch":
+                assert slid.touched is not None and slid.point is not None
+                pin_stop = Stop(
+                    slid.s,
+                    "surface",
+                    held.model.name,
+                    slid.touched.name,
+                    slid.point,
+                    push_reaction(partial(point_on, commanded, current.pin_point), slid.s),
+                    note=f"met it sliding along {current.obstacle.name}",
                 )
             else:
                 s = 1.0
@@ -282,7 +292,7 @@ def walk_segment(
                 # a grazing push: the pin slides along the surface, the arm yields
                 touched = next(o for o in obstacles if o.name == found.obstacle)
                 origin = commanded(found.s).act(local)
-                slide = Slide(touched, found.normal, local, origin)
+                slide = Slide(touched, found.normal, local, origin, held.model.geometry)
                 s = found.s
                 seg.phases.append(Phase(s, slide=slide))
             else:
