@@ -186,3 +186,20 @@ def test_cli_exits_2_on_yaml_bombs(tmp_path: Path, name: str) -> None:
     )
     assert done.returncode == 2, done.stderr
     assert fragment in done.stderr and "line" in done.stderr
+
+
+def test_a_file_that_is_not_utf8_is_refused_at_its_line_and_column(tmp_path: Path) -> None:
+    # Latin-1's é (0xe9) on line 2, after "description: caf" (16 characters): the codec's own
+    # message gave only a byte offset into the file, which no editor shows
+    latin = tmp_path / "latin1.yaml"
+    latin.write_bytes(b"name: x\ndescription: caf\xe9 au lait\nframes: []\n")
+    with pytest.raises(SpecError) as refused:
+        load_task(latin)
+    assert refused.value.line == 2
+    assert "byte 0xe9 at column 17 is not UTF-8" in refused.value.detail
+    # UTF-16's byte-order mark is the first byte of the first line
+    wide = tmp_path / "utf16.yaml"
+    wide.write_bytes("name: x\n".encode("utf-16"))
+    with pytest.raises(SpecError) as refused:
+        load_task(wide)
+    assert refused.value.line == 1 and "column 1" in refused.value.detail

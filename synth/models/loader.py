@@ -45,7 +45,16 @@ def load_task(path: str | Path, *, limits: YamlLimits = DEFAULT_LIMITS) -> TaskS
         text = raw.decode("utf-8")
     except FileNotFoundError:
         raise SpecError(str(p), "no such task file") from None
-    except (OSError, UnicodeDecodeError) as exc:
+    except UnicodeDecodeError as exc:
+        line = raw.count(b"\n", 0, exc.start) + 1
+        column = exc.start - (raw.rfind(b"\n", 0, exc.start) + 1) + 1
+        raise SpecError(
+            str(p),
+            f"byte 0x{raw[exc.start]:02x} at column {column} is not UTF-8: a task file is UTF-8 "
+            "text (save it as UTF-8)",
+            line,
+        ) from None
+    except OSError as exc:
         raise SpecError(str(p), f"cannot read task file: {exc}") from None
     if len(raw) > limits.max_bytes:
         raise SpecError(str(p), f"the task file is over the limit of {limits.max_bytes} bytes")
