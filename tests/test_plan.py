@@ -204,7 +204,10 @@ def test_every_other_fixture_best_first_equals_exhaustive(path: Path) -> None:
     best_first, exhaustive = plan_task(spec), plan_task(spec, options=PlanOptions(exhaustive=True))
     assert best_first.strategy.name == exhaustive.strategy.name
     assert best_first.strategy.expected_time == pytest.approx(exhaustive.strategy.expected_time)
-    assert best_first.refined <= exhaustive.refined == len(exhaustive.candidates)
+    # every candidate refined is kept or refused at refine (seed_4_8_fixture's searching
+    # candidates are: their search reaches over FIX's walls, 1.9 cm below the face)
+    refused = sum(1 for r in exhaustive.rejected if r.stage == "refine")
+    assert best_first.refined <= exhaustive.refined == len(exhaustive.candidates) + refused
 
 
 def test_a_given_dr_ok_beyond_the_parts_lead_is_remarked(seed) -> None:

@@ -15,7 +15,7 @@ import math
 import numpy as np
 import pytest
 import yaml
-from _paths import DATA_TASKS, SEED_TASK
+from _paths import DATA_TASKS, SEED_FIXTURE_TASK, SEED_TASK
 from _tasks import synthesized
 
 from synth.codegen.emitter import emit_program
@@ -35,6 +35,7 @@ BESIDE = DATA_TASKS / "beside_the_box.yaml"
 EDGE = DATA_TASKS / "taper_on_the_edge.yaml"
 PANDA = DATA_TASKS / "panda_palm_past_the_edge.yaml"
 THIN_PLATE = DATA_TASKS / "thin_plate_near_edge.yaml"
+NEIGHBOUR = DATA_TASKS / "neighbour_at_seat_depth.yaml"
 
 
 def _planned_without(monkeypatch, spec, *checks: str) -> PinInHoleStrategy:
@@ -219,3 +220,43 @@ def test_a_top_above_the_support_shields_it(monkeypatch, tmp_path) -> None:
     tops, deeper = support_landings(ctx, where, 0.05)
     assert [t.name for t, _ in tops] == ["PALLET"] and not deeper
     assert tops[0][1] == pytest.approx(0.010, abs=1e-12)
+
+
+def test_a_neighbour_whose_top_lies_at_the_seats_depth_is_refused(monkeypatch) -> None:
+    # NB stands 0.02 cm beyond the box's +x edge, its top 4.9 − 3.19 = 1.71 cm below the face:
+    # d_f. In a world where the box lies ~0.7 cm towards −x, the search goes as far out from
+    # the believed hole in every direction, past the box's true +x edge, and the pin comes down
+    # on NB where the program aimed it: NB stands in the world, so only the hand's own error
+    # (±0.05 in) moves the pin against it, not the box's. Without the check the planner wrote a
+    # program proven 100 of 100 that replayed 296 of 300 at seed 7 and 990 of 1 000 at seed
+    # 11, every failure "rests on NB".
+    spec = load_task(NEIGHBOUR)
+    unchecked = _planned_without(monkeypatch, spec, "support_landing_problem")
+    ctx = plan_context(spec)
+    where = landing(ctx, unchecked)
+    assert where is not None
+    tops, _ = support_landings(ctx, where, where.hand_height)
+    depths = {t.name: depth for t, depth in tops}
+    assert depths["NB"] == pytest.approx(0.0171, abs=1e-12) and where.passes(depths["NB"])
+    context = replay_context(emit_program(unchecked, believed_graph(spec)), spec)
+    fooled = run_trial(context, 7, 9)
+    assert fooled.outcome == "failure" and "PIN1 is not in BH1: it rests on NB" in fooled.message
+    with pytest.raises(SynthError) as refused:
+        plan_task(spec)
+    first = str(refused.value).splitlines()[0]
+    assert "comes down on NB 1.71 cm below the face" in first
+
+
+def test_a_fixtures_walls_out_of_the_aims_reach_are_not_a_landing() -> None:
+    # The seed's fixture cell (A.1): the walls' top is 1.9 cm below the box's face, inside the
+    # test's window around d_f = 1.71 cm, but the walls stand in the world and the program's
+    # aims, spread by the hand's own error, never come over them (the box's error moves the
+    # face, not the aims): 1 000 of 1 000 trials succeed. A check that moved the tops with the
+    # box's error refused the cell.
+    spec = load_task(SEED_FIXTURE_TASK)
+    plan = plan_task(spec)
+    ctx = plan_context(spec)
+    where = landing(ctx, plan.strategy)
+    assert where is not None
+    tops, _ = support_landings(ctx, where, where.hand_height)
+    assert "FIX" not in {t.name for t, _ in tops}

@@ -24,18 +24,19 @@ the test's window too, as a miss on the face does (d_f − Δz > t) with d_f les
 A pin beside a thin part meets what the part stands on before the hand lands: its end stops
 on that floor, ``u`` below the face, the part's height (a plate 1.0 cm thick on the table, a
 through hole d_f = 1.0 cm deep: u = d_f, and the test passes every such miss; 15 of 1 000
-trials of a program proven 100 of 100). The floor is every believed top at the level of the
-part's bottom (the table's plane z = 0, a pallet's or another box's top, a fixture's floor)
-where it lies under a place the search reaches off the face: the places of
-:func:`~synth.strategies.landing.reached_region`, each attempt only in the worlds whose
-earlier attempts missed, as the search stops at the first capture. Floor under a place the pin
-end reaches before the hand lands, u < h, at a depth the test passes, is refused like the
-hand's landing. Other tops beside the part at other levels (a fixture's walls, a neighbour's
-top, a higher block in between) are not checked: on the seed's fixture cell (A.1) the walls'
-top lies 1.9 cm below the box's face, inside the test's window of d_f = 1.71 cm, and a search
-reaching past the box's corner could stop there, but only in worlds far in the footprint's
-corners (1 000 of 1 000 trials succeed). The tops are horizontal planes, so this is checked
-for an upright box part (a tilted face's pin comes down along its tilted axis: not checked).
+trials of a program proven 100 of 100). So does a pin over any other top beside the part: a
+neighbour's, a fixture's walls, a standing pin's head (a block 0.02 cm beyond the box's edge,
+its top d_f below the face: 10 of 1 000 trials, each read as the seat). The attempts that go
+beside are those of :func:`~synth.strategies.landing.reached_places` that leave the face, each
+counted only in the worlds whose earlier attempts missed, as the search stops at the first
+capture. Such an attempt brings the pin down where the program aimed it, off by the pin's error
+against the top: the hand's and the grasp's errors, and the top's own when it is uncertain, but
+not the part's, which moves the face and not the aim (on the seed's fixture cell, A.1, the walls'
+top lies 1.9 cm below the face, inside the test's window of d_f = 1.71 cm, yet no aim comes
+over them: 1 000 of 1 000 trials succeed). The pin comes down on the highest top under it; a top
+under a place the pin end reaches before the hand lands, u < h, at a depth the test passes, is
+refused like the hand's landing. The tops are horizontal planes, so this is checked for an
+upright box part (a tilted face's pin comes down along its tilted axis: not checked).
 
 The pin can go beside the part only if a place it may come down at, some attempt's offset less
 the footprint (±dx × ±dy turned by ζ), lies off the face's outline; this is checked with shapely
@@ -45,18 +46,26 @@ on the outline (the face's own frame) and the attempts' footprint boxes
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 import shapely
-from shapely import affinity
 
+from synth.errors.chain import ErrorChain
 from synth.models.spec import BoxShape, FixtureShape, PinShape, SurfaceShape
 from synth.models.workcell import TABLE
 from synth.strategies.context import PlanContext
+from synth.strategies.footprint import estimate_footprint
 from synth.strategies.landing import Landing
+from synth.strategies.relations import (
+    SpaceBuilder,
+    frame_inverse_terms,
+    grasped_end_terms,
+    hole_frame_offset,
+)
 
 __all__ = ["Top", "false_seat_problem", "solid_tops", "support_landing_problem", "support_landings"]
 
@@ -65,15 +74,21 @@ _UPRIGHT = 1e-6
 """[1] 1 − cos of the tilt below which a face or a solid's top counts as horizontal."""
 _LEVEL = 1e-9
 """[m] a top this near the part's bottom in height is at its level: part of its floor."""
+_AREA = 1e-12
+"""[m²] places of less area than this (a shared edge) are none: no world puts the pin there."""
 
 
 @dataclass(frozen=True)
 class Top:
-    """A horizontal top a pin end may come down on: ``outline`` (world x, y [m]) at ``z`` [m]."""
+    """A horizontal top a pin end may come down on: ``outline`` (world x, y [m]) at ``z`` [m].
+
+    ``frame``: the graph frame the top moves with (None: the world's, the table's).
+    """
 
     name: str
     outline: shapely.Geometry
     z: float
+    frame: str | None = None
 
 
 def _upright(pose: pin.SE3) -> bool:
@@ -82,6 +97,7 @@ def _upright(pose: pin.SE3) -> bool:
 
 def _top(
     name: str,
+    frame: str,
     pose: pin.SE3,
     outer: tuple[float, float],
     z: float,
@@ -101,13 +117,13 @@ def _top(
     ]
     if not _upright(pose):
         hull = shapely.MultiPoint([p[:2] for p in corners]).convex_hull
-        return Top(name, hull, max(float(p[2]) for p in corners))
+        return Top(name, hull, max(float(p[2]) for p in corners), frame)
     outline = shapely.MultiPoint([p[:2] for p in corners]).convex_hull
     if inner[0] > 0.0 and inner[1] > 0.0:
         cavity = [pose.act(np.array([a * inner[0] / 2, b * inner[1] / 2, z])) for a, b in
                   ((-1, -1), (1, -1), (1, 1), (-1, 1))]  # fmt: skip
         outline = outline.difference(shapely.Polygon([p[:2] for p in cavity]))
-    return Top(name, outline, float(pose.act(np.array([0.0, 0.0, z]))[2]))
+    return Top(name, outline, float(pose.act(np.array([0.0, 0.0, z]))[2]), frame)
 
 
 def solid_tops(ctx: PlanContext) -> Iterator[Top]:
@@ -127,28 +143,31 @@ def solid_tops(ctx: PlanContext) -> Iterator[Top]:
         pose = graph.world_from(name)
         if isinstance(shape, BoxShape):
             sx, sy, sz = shape.size
-            yield _top(node.al_name, pose, (sx, sy), sz)
+            yield _top(node.al_name, name, pose, (sx, sy), sz)
         elif isinstance(shape, FixtureShape):
             ix, iy, depth = shape.inside
             outer = (ix + 2 * shape.wall, iy + 2 * shape.wall)
-            yield _top(node.al_name, pose, outer, depth, inner=(ix, iy))
-            yield _top(f"{node.al_name}'s floor", pose, (ix, iy), 0.0)
+            yield _top(node.al_name, name, pose, outer, depth, inner=(ix, iy))
+            yield _top(f"{node.al_name}'s floor", name, pose, (ix, iy), 0.0)
         elif isinstance(shape, PinShape):
-            yield _top(node.al_name, pose, (shape.diameter, shape.diameter), shape.length)
+            yield _top(node.al_name, name, pose, (shape.diameter, shape.diameter), shape.length)
 
 
 def support_landings(
     ctx: PlanContext, where: Landing, above: float
 ) -> tuple[list[tuple[Top, float]], bool]:
-    """The floor a pin gone beside the face comes down on, if less than ``above`` [m] below.
+    """The tops a pin gone beside the face comes down on, if less than ``above`` [m] below.
 
-    The floor is every top at the level of the part's bottom (module docstring); each top
-    under a place off the face is given with its depth below the face [m], and whether some
-    place off the face has no floor under it within ``above`` (the pin goes deeper there). The
-    places off the face are the reached region less the outline grown by the pin's radius
-    (nearer, the pin leans on the edge), in the world; a top is under a place when its outline
-    grown by the pin's radius covers it. For a face whose normal is not vertical, or a part
-    that is not an upright box, none is found and every place may go deeper.
+    The attempts that go beside are those whose reached places (:attr:`Landing.attempts`) leave
+    the outline grown by the pin's radius (nearer, the pin leans on the edge). Such an attempt
+    puts the pin end where the program aims it, less the pin's error against the top's own
+    frame (:func:`_pin_places`: the hand's and the grasp's errors, and the top's if it is
+    uncertain; the part's own errors move the face, not the aim). Each top, highest first, under
+    some place of an attempt not already stopped above it is given with its depth below the face
+    [m]; an attempt all of whose places lie over a top stops there. The flag says whether some
+    attempt is not stopped by any top within ``above`` (the pin may go deeper there). For a face
+    whose normal is not vertical, or a part that is not an upright box, none is found and every
+    place may go deeper.
     """
     surface = ctx.hole_shape.surface
     shape = ctx.graph.node(surface).shape
@@ -159,20 +178,61 @@ def support_landings(
     bottom = ctx.graph.world_from(part)
     if not isinstance(ctx.graph.node(part).shape, BoxShape) or not _upright(bottom):
         return [], True
-    floor = float(bottom.translation[2])  # where the part stands: its box frame's origin
-    depth = float(face.translation[2]) - floor
     radius = ctx.pin_shape.diameter / 2
-    off = where.reached.difference(shapely.Polygon(shape.outline).buffer(radius))
-    if off.is_empty or depth >= above:
-        return [], True  # only the edge is reached (the taper's case), or the floor is deeper
-    left = affinity.affine_transform(
-        off,
-        [*face.rotation[0, :2], *face.rotation[1, :2], *face.translation[:2]],
-    )
-    tops = [t for t in solid_tops(ctx) if abs(t.z - floor) <= _LEVEL]
-    reaches = [t.outline.buffer(radius) for t in tops]
-    found = [(t, depth) for t, reach in zip(tops, reaches, strict=True) if reach.intersects(left)]
-    return found, not left.difference(shapely.union_all(reaches)).is_empty
+    outline = shapely.Polygon(shape.outline).buffer(radius)
+    beside = [
+        offset
+        for offset, places in where.attempts
+        if places is not None and places.difference(outline).area > _AREA
+    ]
+    if not beside:
+        return [], True  # only the edge is reached (the taper's case)
+    level = float(face.translation[2])
+    part_name = ctx.graph.node(part).al_name
+    tops = [t for t in solid_tops(ctx) if t.name != part_name and level - t.z < above]
+    found = []
+    for top in sorted(tops, key=lambda t: -t.z):  # the pin comes down on the highest under it
+        reach = top.outline.buffer(radius)
+        places = _pin_places(ctx, where, top.frame, beside)
+        if any(reach.intersection(p).area > _AREA for p in places):
+            found.append((top, level - top.z))
+        beside = [o for o, p in zip(beside, places, strict=True) if not reach.covers(p)]
+    return found, bool(beside)
+
+
+def _pin_places(
+    ctx: PlanContext, where: Landing, frame: str | None, offsets: list[tuple[float, float]]
+) -> list[shapely.Geometry]:
+    """Where the pin end of each attempt may be, over frame ``frame`` (world x, y [m]).
+
+    The attempt at offset o aims the end at ``hole₀ ∘ trans(o)``, the hole as believed; the end
+    truly lies within the error footprint of ``frame⁻¹ ∘ end`` (:func:`estimate_footprint` of
+    the relation of :mod:`synth.strategies.relations` with the hole's chain replaced by the
+    frame's: ±Δx × ±Δy turned by ζ, in the frame's nominal axes) about the aim.
+    """
+    strategy = where.strategy
+    builder = SpaceBuilder()
+    terms = [] if frame is None else frame_inverse_terms(ctx.graph, frame, builder)
+    end = ctx.world_hole * hole_frame_offset(strategy.phi, (0.0, 0.0, strategy.standoff))
+    grasp = strategy.pickup.grasp
+    hand = end * ctx.pin_from_end.inverse() * grasp.pin_from_hand()
+    residual = strategy.pickup.grasp_determination
+    terms += grasped_end_terms(ctx, grasp, residual, hand, builder, "hand:approach")
+    dx = dy = zeta = 0.0
+    if builder.blocks:
+        footprint, _ = estimate_footprint(ctx, ErrorChain(builder.space(), tuple(terms)))
+        dx, dy, zeta = footprint.dx, footprint.dy, footprint.zeta
+    nominal = pin.SE3.Identity() if frame is None else ctx.graph.world_from(frame)
+    c, s = math.cos(zeta), math.sin(zeta)
+    corners = np.array([[c, -s], [s, c]]) @ np.array(
+        [[-dx, dx, dx, -dx], [-dy, -dy, dy, dy]]
+    )  # fmt: skip
+    turn, shift = nominal.rotation[:2, :2], nominal.translation[:2]
+    out = []
+    for x, y in offsets:
+        aim = nominal.actInv(ctx.world_hole.act(np.array([x, y, 0.0])))[:2]
+        out.append(shapely.Polygon((turn @ (aim[:, None] + corners) + shift[:, None]).T))
+    return out
 
 
 def support_landing_problem(ctx: PlanContext, where: Landing) -> str | None:

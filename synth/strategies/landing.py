@@ -25,7 +25,14 @@ from synth.strategies.context import PlanContext, end_from_hand
 from synth.strategies.fine import search_offsets
 from synth.strategies.records import Grasp, PinInHoleStrategy
 
-__all__ = ["Landing", "hand_height_above_end", "landing", "landing_region"]
+__all__ = [
+    "Landing",
+    "hand_height_above_end",
+    "landing",
+    "landing_region",
+    "reached_places",
+    "reached_region",
+]
 
 
 @dataclass(frozen=True)
@@ -35,7 +42,9 @@ class Landing:
     ``region``: :func:`landing_region`; ``reached``: :func:`reached_region`, the part of it
     the search goes on to reach; ``hand_height`` [m]: :func:`hand_height_above_end` at
     the strategy's grasp; ``d_f`` [m] the believed seat's depth, ``threshold`` [m] the success
-    test's t and ``dz`` [m] the depth error at the test (:attr:`PinInHoleStrategy.dz_at_test`).
+    test's t and ``dz`` [m] the depth error at the test (:attr:`PinInHoleStrategy.dz_at_test`);
+    ``attempts``: each attempt's offset (hole frame [m]) and its places of :func:`reached_places`
+    (None where no world reaches it), in the program's order.
     """
 
     region: shapely.Geometry
@@ -44,6 +53,8 @@ class Landing:
     d_f: float
     threshold: float
     dz: float
+    strategy: PinInHoleStrategy
+    attempts: tuple[tuple[tuple[float, float], shapely.Geometry | None], ...]
 
     def window(self) -> str:
         """The success test's window in words, for a refusal."""
@@ -70,8 +81,10 @@ def landing(ctx: PlanContext, strategy: PinInHoleStrategy) -> Landing | None:
     dz = strategy.dz_at_test
     if region is None or dz is None:
         return None
-    reached = reached_region(ctx, strategy, _CAPTURED * ctx.insertion.lead)
-    assert reached is not None  # a footprint gives both
+    places = reached_places(ctx, strategy, _CAPTURED * ctx.insertion.lead)
+    assert places is not None  # a footprint gives both
+    reached = shapely.union_all([p for p in places if p is not None])
+    offsets = [(0.0, 0.0), *search_offsets(strategy)]
     return Landing(
         region,
         reached,
@@ -79,6 +92,8 @@ def landing(ctx: PlanContext, strategy: PinInHoleStrategy) -> Landing | None:
         ctx.insertion.d_f,
         strategy.success_threshold,
         dz,
+        strategy,
+        tuple(zip(offsets, places, strict=True)),
     )
 
 
@@ -93,26 +108,42 @@ def reached_region(
 ) -> shapely.Geometry | None:
     """The places the pin end may come down at, each attempt in the worlds that reach it.
 
+    The union of :func:`reached_places` (face frame, [m]); it lies within
+    :func:`landing_region`. None for a strategy without a footprint.
+    """
+    places = reached_places(ctx, strategy, capture)
+    if places is None:
+        return None
+    return shapely.union_all([p for p in places if p is not None])
+
+
+def reached_places(
+    ctx: PlanContext, strategy: PinInHoleStrategy, capture: float
+) -> list[shapely.Geometry | None] | None:
+    """Per attempt, the places its pin end may come down at in the worlds that reach it.
+
     An attempt at offset o_k is made only when every attempt before it missed: the pin end
     against the true hole, o_j − e (e the pin's error, in the footprint F), lay farther than
     ``capture`` [m] from the axis for each j < k. Attempt k's places are o_k − E_k, E_k = F
-    less the discs of radius ``capture`` about the earlier offsets; their union (face frame,
-    [m]) lies within :func:`landing_region`. None for a strategy without a footprint.
+    less the discs of radius ``capture`` about the earlier offsets (face frame, [m]); None for
+    an attempt no world reaches, and None for a strategy without a footprint.
     """
     attempts = _attempts(ctx, strategy)
     if attempts is None:
         return None
     box, to_face, origin, offsets = attempts
     errors = shapely.Polygon(box.T)  # F, in the hole frame
-    places = []
+    matrix = [*to_face[0], *to_face[1], *origin]
+    places: list[shapely.Geometry | None] = []
     for x, y in offsets:
-        if not errors.is_empty:
+        if errors.is_empty:
+            places.append(None)
+        else:
             # o − E: E turned half a turn about the origin, moved to o
             turned = affinity.scale(errors, -1.0, -1.0, origin=(0.0, 0.0))
-            places.append(affinity.translate(turned, x, y))
+            places.append(affinity.affine_transform(affinity.translate(turned, x, y), matrix))
         errors = errors.difference(shapely.Point(x, y).buffer(capture, quad_segs=32))
-    matrix = [*to_face[0], *to_face[1], *origin]
-    return affinity.affine_transform(shapely.union_all(places), matrix)
+    return places
 
 
 def landing_region(ctx: PlanContext, strategy: PinInHoleStrategy) -> shapely.Geometry | None:

@@ -32,7 +32,8 @@ from synth.models.spec import WORLD
 from synth.models.uncertainty import Uncertainty
 from synth.models.world import World
 from synth.strategies.context import PlanContext
-from synth.strategies.hypotheses import Affixed, ApproachStandoff, GraspDetermination
+from synth.strategies.hypotheses import Affixed, ApproachStandoff, Bounds, GraspDetermination
+from synth.strategies.records import Grasp
 
 MEASUREMENT = "tap.measurement"
 """Owner of the tap's measurement variable m [m] (a one-parameter ``z`` block)."""
@@ -107,9 +108,22 @@ def held_end_terms(
 
     The grasp comes from the world's :class:`Affixed` fact and the grasp determination from
     its :class:`GraspDetermination`: no block when exact, else ``(param, lo, hi)`` bounds of
-    the pin's error in the hand.
+    the pin's error in the hand (:func:`grasped_end_terms`).
     """
     grasp = world.get(Affixed, ctx.pin_al, ctx.hand_al).grasp
+    residual = world.get(GraspDetermination, ctx.pin_al).residual
+    return grasped_end_terms(ctx, grasp, residual, world_from_hand, builder, hand_key)
+
+
+def grasped_end_terms(
+    ctx: PlanContext,
+    grasp: Grasp,
+    residual: Bounds | None,
+    world_from_hand: pin.SE3,
+    builder: SpaceBuilder,
+    hand_key: str,
+) -> list[Term]:
+    """:func:`held_end_terms` of the pin held by ``grasp``, ``residual`` its error in the hand."""
     terms: list[Term] = [Fixed(world_from_hand)]
     if ctx.hand_error is not None and ctx.hand_error.bounds():
         unc = ctx.hand_error
@@ -117,9 +131,8 @@ def held_end_terms(
         index = builder.block(hand_key, lambda: ParameterBlock.from_uncertainty(owner, unc))
         terms.append(Perturbation(index))
     terms.append(Fixed(grasp.pin_from_hand().inverse()))
-    bounds = world.get(GraspDetermination, ctx.pin_al).residual
-    if bounds:
-        index = builder.block("grasp", lambda: box_block(f"{ctx.pin_al}@grasp", bounds))
+    if residual:
+        index = builder.block("grasp", lambda: box_block(f"{ctx.pin_al}@grasp", residual))
         terms.append(Perturbation(index))
     terms.append(Fixed(ctx.pin_from_end))
     return terms
