@@ -57,7 +57,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import coal
 import numpy as np
@@ -191,6 +191,8 @@ class GrossMotionCheck:
     carrying: SweepOptions = field(default_factory=SweepOptions)
     fine_motion: SweepOptions = field(default_factory=SweepOptions)
     solid_frames: dict[str, str] = field(default_factory=dict)
+    hand_error: Uncertainty | None = None
+    wrist_radii: dict[str, float] = field(default_factory=dict)
     _scenes: dict[tuple[object, ...], CollisionScene] = field(default_factory=dict)
 
     @staticmethod
@@ -227,6 +229,7 @@ class GrossMotionCheck:
                 solid_frames[obstacle.name] = frame
                 solids[obstacle.name] = solid_displacement(graph, frame, obstacle.geometry)
         moving: dict[str, float] = {}  # the arm's bodies near the hand, and the held pin
+        radii: dict[str, float] = {}  # the wrist links' balls about the hand's origin
         if hand_error is not None:
             probe = CollisionScene(
                 arm,
@@ -240,6 +243,8 @@ class GrossMotionCheck:
                     placed = hand.actInv(probe.body_pose(q_reference, body.name))
                     radius = bounding_radius(body.geometry, placed)
                     moving[body.name] = link_margin(hand_error, radius)
+                    if body.role not in ("hand", "held"):
+                        radii[body.name] = radius
         standing = solid_displacement(graph, pin_frame, pin_standing.geometry)
         arm_only = {name: m for name, m in moving.items() if name != carried.name}
         rigid = frozenset([*(b.name for b in arm.bodies), carried.name])
@@ -256,6 +261,8 @@ class GrossMotionCheck:
             carrying=SweepOptions(margins=moving, displacements=solids, rigid=rigid),
             fine_motion=SweepOptions(displacements=solids, rigid=rigid),
             solid_frames=solid_frames,
+            hand_error=hand_error,
+            wrist_radii=radii,
         )
 
     def part_of(self, graph: AttributeGraph, frame: str) -> str | None:
@@ -266,11 +273,28 @@ class GrossMotionCheck:
                 return by_frame[name]
         return None
 
-    def fine_options(self, part: str | None) -> SweepOptions:
-        """Fine motions at ``part``: the part without a margin (the hand follows it)."""
-        if part is None:
-            return self.fine_motion
+    def fine_options(
+        self, part: str | None, seated_hand: NDArray[np.float64] | None = None
+    ) -> SweepOptions:
+        """Fine motions at ``part``: the part without a margin (the hand follows it).
+
+        The hand follows the pin, which the hole holds, but the pin sits in the hand where the
+        hand closed on it: off by the hand's positioning error at the pickup, less what
+        ``CENTER`` takes out along the fingers' closing axis (x). So the hand stands off its
+        believed seat by up to that error's y and z tolerances and its turns, in its own frame
+        (``seated_hand``: its world rotation at the seat): each wrist link gets that directional
+        bound (:func:`link_displacement` at its ball about the hand's origin). A wrist link that
+        comes within the clearance is a collision (a UR5 holding the pin sideways, γ = 100°:
+        wrist_3_link 0.3 cm above the box's face in the plan came within 0.08–0.10 cm of it in
+        1 % of the replay's worlds); the fingers and the palm touching are felt by the wrist's
+        sensor, and keep the clearance only. Without ``seated_hand``, none.
+        """
         displacements = {k: v for k, v in self.fine_motion.displacements.items() if k != part}
+        if seated_hand is not None and self.hand_error is not None:
+            grip = link_displacement(self.hand_error, seated_hand, 0.0)
+            grip = replace(grip, translation=grip.translation * np.array([0.0, 1.0, 1.0]))
+            for name, radius in self.wrist_radii.items():
+                displacements[name] = Displacement((replace(grip, radius=radius),))
         return SweepOptions(displacements=displacements, rigid=self.fine_motion.rigid)
 
     def support_of(self, graph: AttributeGraph, part: str) -> str:

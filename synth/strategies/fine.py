@@ -99,7 +99,7 @@ def fine_motion_obstruction(
     gross = ctx.gross
     grasp = strategy.pickup.grasp
     part = gross.part_of(ctx.graph, ctx.hole_frame)
-    options = gross.fine_options(part)
+    options = gross.fine_options(part, ctx.arm.forward(cand.q_destination).rotation)
     scene = gross.fine(grasp, part)
     hole = ctx.hole_al
     d_f = ctx.insertion.d_f
