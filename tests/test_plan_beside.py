@@ -22,12 +22,13 @@ from synth.codegen.emitter import emit_program
 from synth.exceptions import SynthError
 from synth.models.believed import believed_graph
 from synth.models.loader import load_task
+from synth.models.spec import TaskSpec
 from synth.replay.run import replay_context, run_trial, trial_world
 from synth.replay.trace import record_run
 from synth.strategies import plan_task
-from synth.strategies.beside import support_landings
+from synth.strategies.beside import Top, support_landings
 from synth.strategies.context import end_from_hand, plan_context
-from synth.strategies.landing import hand_height_above_end, landing
+from synth.strategies.landing import Landing, hand_height_above_end, landing
 from synth.strategies.records import PinInHoleStrategy
 from synth.units import INCH
 
@@ -45,6 +46,17 @@ def _planned_without(monkeypatch, spec, *checks: str) -> PinInHoleStrategy:
     unchecked = plan_task(spec).strategy
     monkeypatch.undo()
     return unchecked
+
+
+def _tops(
+    spec: TaskSpec, strategy: PinInHoleStrategy, above: float | None = None
+) -> tuple[Landing, list[tuple[Top, float]], bool]:
+    """``strategy``'s landing and :func:`support_landings` within ``above`` (default ``h``)."""
+    ctx = plan_context(spec)
+    where = landing(ctx, strategy)
+    assert where is not None
+    tops, deeper = support_landings(ctx, where, where.hand_height if above is None else above)
+    return where, tops, deeper
 
 
 def test_the_hands_lowest_point_is_the_fingers_edge_in_closed_form() -> None:
@@ -175,10 +187,7 @@ def test_a_miss_beside_a_thin_plate_on_the_table_is_refused(monkeypatch) -> None
     spec = load_task(THIN_PLATE)
     graph = believed_graph(spec)
     unchecked = _planned_without(monkeypatch, spec, "support_landing_problem")
-    ctx = plan_context(spec)
-    where = landing(ctx, unchecked)
-    assert where is not None
-    tops, deeper = support_landings(ctx, where, where.hand_height)
+    where, tops, deeper = _tops(spec, unchecked)
     # the table, the plate's thickness below its face (the task's box: 1.0 cm tall), and no
     # place off the face where the pin goes down to the hand
     assert [t.name for t, _ in tops] == ["table"] and not deeper
@@ -214,10 +223,7 @@ def test_a_top_above_the_support_shields_it(monkeypatch, tmp_path) -> None:
     path.write_text(yaml.safe_dump(document, sort_keys=False), encoding="utf-8")
     stacked = load_task(path)
     unchecked = _planned_without(monkeypatch, stacked, "support_landing_problem")
-    ctx = plan_context(stacked)
-    where = landing(ctx, unchecked)
-    assert where is not None
-    tops, deeper = support_landings(ctx, where, 0.05)
+    _, tops, deeper = _tops(stacked, unchecked, 0.05)
     assert [t.name for t, _ in tops] == ["PALLET"] and not deeper
     assert tops[0][1] == pytest.approx(0.010, abs=1e-12)
 
@@ -232,10 +238,7 @@ def test_a_neighbour_whose_top_lies_at_the_seats_depth_is_refused(monkeypatch) -
     # 11, every failure "rests on NB".
     spec = load_task(NEIGHBOUR)
     unchecked = _planned_without(monkeypatch, spec, "support_landing_problem")
-    ctx = plan_context(spec)
-    where = landing(ctx, unchecked)
-    assert where is not None
-    tops, _ = support_landings(ctx, where, where.hand_height)
+    where, tops, _ = _tops(spec, unchecked)
     depths = {t.name: depth for t, depth in tops}
     assert depths["NB"] == pytest.approx(0.0171, abs=1e-12) and where.passes(depths["NB"])
     context = replay_context(emit_program(unchecked, believed_graph(spec)), spec)
@@ -254,9 +257,5 @@ def test_a_fixtures_walls_out_of_the_aims_reach_are_not_a_landing() -> None:
     # face, not the aims): 1 000 of 1 000 trials succeed. A check that moved the tops with the
     # box's error refused the cell.
     spec = load_task(SEED_FIXTURE_TASK)
-    plan = plan_task(spec)
-    ctx = plan_context(spec)
-    where = landing(ctx, plan.strategy)
-    assert where is not None
-    tops, _ = support_landings(ctx, where, where.hand_height)
+    _, tops, _ = _tops(spec, plan_task(spec).strategy)
     assert "FIX" not in {t.name for t, _ in tops}

@@ -111,6 +111,7 @@ def _touch(
             apart = middle
         else:
             touching = middle
-    yielded = slide.yielded(pose_at(touching))
-    point = pin_.distance(yielded, target, exact=True)[2]
-    return ScrapeEnd(touching, "touch", slide.deflection(pose_at(touching)), target.obstacle, point)
+    pose = pose_at(touching)
+    deflection = slide.deflection(pose)
+    point = pin_.distance(slide.yielded(pose, deflection), target, exact=True)[2]
+    return ScrapeEnd(touching, "touch", deflection, target.obstacle, point)

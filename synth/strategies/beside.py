@@ -46,7 +46,6 @@ on the outline (the face's own frame) and the attempts' footprint boxes
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterator
 from dataclasses import dataclass
 
@@ -64,6 +63,7 @@ from synth.strategies.relations import (
     SpaceBuilder,
     frame_inverse_terms,
     grasped_end_terms,
+    hand_holding_end,
     hole_frame_offset,
 )
 
@@ -72,8 +72,6 @@ __all__ = ["Top", "false_seat_problem", "solid_tops", "support_landing_problem",
 
 _UPRIGHT = 1e-6
 """[1] 1 − cos of the tilt below which a face or a solid's top counts as horizontal."""
-_LEVEL = 1e-9
-"""[m] a top this near the part's bottom in height is at its level: part of its floor."""
 _AREA = 1e-12
 """[m²] places of less area than this (a shared edge) are none: no world puts the pin there."""
 
@@ -215,18 +213,14 @@ def _pin_places(
     terms = [] if frame is None else frame_inverse_terms(ctx.graph, frame, builder)
     end = ctx.world_hole * hole_frame_offset(strategy.phi, (0.0, 0.0, strategy.standoff))
     grasp = strategy.pickup.grasp
-    hand = end * ctx.pin_from_end.inverse() * grasp.pin_from_hand()
+    hand = hand_holding_end(ctx, grasp, end)
     residual = strategy.pickup.grasp_determination
     terms += grasped_end_terms(ctx, grasp, residual, hand, builder, "hand:approach")
-    dx = dy = zeta = 0.0
+    corners = np.zeros((2, 4))  # no error block: the pin comes down where it is aimed
     if builder.blocks:
         footprint, _ = estimate_footprint(ctx, ErrorChain(builder.space(), tuple(terms)))
-        dx, dy, zeta = footprint.dx, footprint.dy, footprint.zeta
+        corners = footprint.corners()
     nominal = pin.SE3.Identity() if frame is None else ctx.graph.world_from(frame)
-    c, s = math.cos(zeta), math.sin(zeta)
-    corners = np.array([[c, -s], [s, c]]) @ np.array(
-        [[-dx, dx, dx, -dx], [-dy, -dy, dy, dy]]
-    )  # fmt: skip
     turn, shift = nominal.rotation[:2, :2], nominal.translation[:2]
     out = []
     for x, y in offsets:

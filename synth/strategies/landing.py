@@ -81,10 +81,9 @@ def landing(ctx: PlanContext, strategy: PinInHoleStrategy) -> Landing | None:
     dz = strategy.dz_at_test
     if region is None or dz is None:
         return None
-    places = reached_places(ctx, strategy, _CAPTURED * ctx.insertion.lead)
-    assert places is not None  # a footprint gives both
-    reached = shapely.union_all([p for p in places if p is not None])
-    offsets = [(0.0, 0.0), *search_offsets(strategy)]
+    attempts = reached_places(ctx, strategy, _CAPTURED * ctx.insertion.lead)
+    assert attempts is not None  # a footprint gives both
+    reached = shapely.union_all([p for _, p in attempts if p is not None])
     return Landing(
         region,
         reached,
@@ -93,7 +92,7 @@ def landing(ctx: PlanContext, strategy: PinInHoleStrategy) -> Landing | None:
         strategy.success_threshold,
         dz,
         strategy,
-        tuple(zip(offsets, places, strict=True)),
+        tuple(attempts),
     )
 
 
@@ -111,16 +110,16 @@ def reached_region(
     The union of :func:`reached_places` (face frame, [m]); it lies within
     :func:`landing_region`. None for a strategy without a footprint.
     """
-    places = reached_places(ctx, strategy, capture)
-    if places is None:
+    attempts = reached_places(ctx, strategy, capture)
+    if attempts is None:
         return None
-    return shapely.union_all([p for p in places if p is not None])
+    return shapely.union_all([p for _, p in attempts if p is not None])
 
 
 def reached_places(
     ctx: PlanContext, strategy: PinInHoleStrategy, capture: float
-) -> list[shapely.Geometry | None] | None:
-    """Per attempt, the places its pin end may come down at in the worlds that reach it.
+) -> list[tuple[tuple[float, float], shapely.Geometry | None]] | None:
+    """Per attempt, its offset and where its pin end may come down in the worlds reaching it.
 
     An attempt at offset o_k is made only when every attempt before it missed: the pin end
     against the true hole, o_j − e (e the pin's error, in the footprint F), lay farther than
@@ -128,22 +127,22 @@ def reached_places(
     less the discs of radius ``capture`` about the earlier offsets (face frame, [m]); None for
     an attempt no world reaches, and None for a strategy without a footprint.
     """
-    attempts = _attempts(ctx, strategy)
-    if attempts is None:
+    made = _attempts(ctx, strategy)
+    if made is None:
         return None
-    box, to_face, origin, offsets = attempts
+    box, to_face, origin, offsets = made
     errors = shapely.Polygon(box.T)  # F, in the hole frame
     matrix = [*to_face[0], *to_face[1], *origin]
-    places: list[shapely.Geometry | None] = []
+    attempts: list[tuple[tuple[float, float], shapely.Geometry | None]] = []
     for x, y in offsets:
-        if errors.is_empty:
-            places.append(None)
-        else:
+        places = None
+        if not errors.is_empty:
             # o − E: E turned half a turn about the origin, moved to o
             turned = affinity.scale(errors, -1.0, -1.0, origin=(0.0, 0.0))
-            places.append(affinity.affine_transform(affinity.translate(turned, x, y), matrix))
+            places = affinity.affine_transform(affinity.translate(turned, x, y), matrix)
+        attempts.append(((x, y), places))
         errors = errors.difference(shapely.Point(x, y).buffer(capture, quad_segs=32))
-    return places
+    return attempts
 
 
 def landing_region(ctx: PlanContext, strategy: PinInHoleStrategy) -> shapely.Geometry | None:
@@ -178,14 +177,13 @@ def _attempts(ctx: PlanContext, strategy: PinInHoleStrategy) -> _Attempts | None
     if footprint is None:
         return None
     face_from_hole = ctx.graph.relative(ctx.hole_shape.surface, ctx.hole_frame)
-    c, s = math.cos(footprint.zeta), math.sin(footprint.zeta)
-    turn = np.array([[c, -s], [s, c]])
-    box = turn @ np.array(
-        [[-footprint.dx, footprint.dx, footprint.dx, -footprint.dx],
-         [-footprint.dy, -footprint.dy, footprint.dy, footprint.dy]]
-    )  # fmt: skip
     offsets = [(0.0, 0.0), *search_offsets(strategy)]
-    return box, face_from_hole.rotation[:2, :2], face_from_hole.translation[:2], offsets
+    return (
+        footprint.corners(),
+        face_from_hole.rotation[:2, :2],
+        face_from_hole.translation[:2],
+        offsets,
+    )
 
 
 def hand_height_above_end(ctx: PlanContext, grasp: Grasp) -> float:

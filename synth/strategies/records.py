@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import NDArray
 
 from synth.strategies.causes import classify
 from synth.units import INCH
@@ -153,6 +154,15 @@ class ErrorFootprint:
     def dr(self) -> float:
         """``Δr = max(Δx, Δy)`` (seed L2437)."""
         return max(self.dx, self.dy)
+
+    def corners(self) -> NDArray[np.float64]:
+        """The box's corners in the hole plane [m], as columns: ±dx × ±dy turned by ζ."""
+        c, s = math.cos(self.zeta), math.sin(self.zeta)
+        turn = np.array([[c, -s], [s, c]])
+        return turn @ np.array(
+            [[-self.dx, self.dx, self.dx, -self.dx],
+             [-self.dy, -self.dy, self.dy, self.dy]]
+        )  # fmt: skip
 
     def to_json(self) -> dict[str, Any]:
         """JSON form (SI)."""

@@ -141,6 +141,11 @@ def grasped_end_terms(
 def hand_for_end(ctx: PlanContext, world: World, world_from_end: pin.SE3) -> pin.SE3:
     """Nominal world pose of the hand holding the pin end at ``world_from_end``."""
     grasp = world.get(Affixed, ctx.pin_al, ctx.hand_al).grasp
+    return hand_holding_end(ctx, grasp, world_from_end)
+
+
+def hand_holding_end(ctx: PlanContext, grasp: Grasp, world_from_end: pin.SE3) -> pin.SE3:
+    """:func:`hand_for_end` of the pin held by ``grasp``."""
     return world_from_end * ctx.pin_from_end.inverse() * grasp.pin_from_hand()
 
 
