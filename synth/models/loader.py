@@ -81,7 +81,7 @@ def validate_task(data: dict[str, Any], lines: dict[PathKey, int] | None = None)
     try:
         spec = TaskSpec.model_validate(data)
     except ValidationError as exc:
-        err = exc.errors(include_url=False)[0]
+        err = _first_error(exc.errors(include_url=False))
         loc = _strip_union_tags(err["loc"])
         message = _message(err)
         raise SpecError(format_path(loc), message, line_of(loc, lines)) from None
@@ -381,6 +381,22 @@ def _check_feasible(unc: Uncertainty, loc: PathKey, fail: Any) -> None:
         fail((*loc, "constraints"), "the constraints and bounds admit no error values (infeasible)")
     if res.status != 0:
         fail((*loc, "constraints"), f"could not check the constraints: {res.message}")
+
+
+def _first_error(errors: list[Any]) -> Any:
+    """The error to report: the first, unless it is a missing field beside an unknown one.
+
+    ``{a: 1}`` where ``{lo, hi}`` is expected gives pydantic's "lo missing" first; the key the
+    engineer wrote, ``a``, is the one to name (a misspelt field is the usual cause).
+    """
+    first = errors[0]
+    if first.get("type") != "missing":
+        return first
+    parent = tuple(first.get("loc", ()))[:-1]
+    for err in errors[1:]:
+        if err.get("type") == "extra_forbidden" and tuple(err.get("loc", ()))[:-1] == parent:
+            return err
+    return first
 
 
 def _message(err: Any) -> str:

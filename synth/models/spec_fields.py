@@ -66,6 +66,11 @@ class Rotation(SpecModel):
             ((key, value),) = data.items()
             if key in ("x", "y", "z"):
                 return {"axis": key, "angle": value}
+            if key not in ("axis", "angle"):
+                raise ValueError(
+                    f"{key!r} is not an axis: a rotation is {{x|y|z: angle}} or "
+                    "{axis: x|y|z, angle: …}"
+                )
         return data
 
 
