@@ -47,3 +47,28 @@ def test_an_unreachable_scheduler_is_a_usage_error(
     argv = ["replay", str(SEED_SEARCH), "--task", str(SEED_TASK), "--trials", "2"]
     assert main([*argv, "--dask", "tcp://127.0.0.1:9"]) == 2
     assert "--dask tcp://127.0.0.1:9: cannot reach the scheduler" in capsys.readouterr().err
+
+
+class _SlowToClose:
+    """A client or cluster whose close times out, as a loaded machine's may after Ctrl-C."""
+
+    def __init__(self) -> None:
+        self.asked = 0
+
+    def close(self) -> None:
+        self.asked += 1
+        raise TimeoutError("timed out after 30 s")
+
+
+def test_a_close_that_times_out_is_a_warning_not_an_internal_error(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    client, local = _SlowToClose(), _SlowToClose()
+    cluster._close(client, local)
+    # both were asked (the cluster too, after the client failed) and each failure said once
+    assert (client.asked, local.asked) == (1, 1)
+    said = [r.getMessage() for r in caplog.records]
+    assert said == [
+        "the Dask client did not close cleanly (TimeoutError: timed out after 30 s)",
+        "the Dask local cluster did not close cleanly (TimeoutError: timed out after 30 s)",
+    ]

@@ -42,6 +42,7 @@ _CHUNK = 8
 _AHEAD = 4
 """Tasks in flight per worker thread."""
 _LOCK = threading.Lock()
+_LOG = logging.getLogger(__name__)
 
 CONNECT_TIMEOUT_S = 5.0
 """[s] how long ``--dask ADDRESS`` keeps retrying an unreachable scheduler before it gives up."""
@@ -112,8 +113,11 @@ def iter_trials_on(
             yield from result_or_interrupt(in_flight.popleft(), stop)
     finally:
         if in_flight:
-            Event(stopped, client=client).set()  # the running chunks end after their trial
-            client.cancel(list(in_flight))
+            try:
+                Event(stopped, client=client).set()  # the running chunks end after their trial
+                client.cancel(list(in_flight))
+            except Exception as exc:  # best effort: the chunks left run out (8 trials each)
+                _LOG.warning("the Dask tasks left could not be cancelled (%s)", _said(exc))
 
 
 @contextmanager
@@ -163,8 +167,7 @@ def dask_client(address: str, workers: int) -> Generator[Any, None, None]:
         try:
             yield client
         finally:
-            client.close()
-            cluster.close()
+            _close(client, cluster)
         return
     try:
         client = Client(address, timeout=CONNECT_TIMEOUT_S)
@@ -173,4 +176,24 @@ def dask_client(address: str, workers: int) -> Generator[Any, None, None]:
     try:
         yield client
     finally:
-        client.close()
+        _close(client)
+
+
+def _said(exc: BaseException) -> str:
+    return f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
+
+
+def _close(client: Any, cluster: Any = None) -> None:
+    """Close the client (and a local cluster), a failure to close a warning only.
+
+    The trials' results are in by then: a scheduler or worker slow to stop on a loaded
+    machine (a close that times out after a Ctrl-C) must not turn a finished or interrupted
+    replay into an internal error.
+    """
+    for kind, closable in (("client", client), ("local cluster", cluster)):
+        if closable is None:
+            continue
+        try:
+            closable.close()
+        except Exception as exc:
+            _LOG.warning("the Dask %s did not close cleanly (%s)", kind, _said(exc))
