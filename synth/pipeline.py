@@ -198,6 +198,7 @@ class SequenceSynthesis(_Proven):
                 "strategy": s.strategy.to_json(),
                 "errors": None if errors is None else errors.to_json(),
                 "reuse": None,
+                "correction_declined": None,
             }
             if isinstance(s.alone, str):
                 record["without_reuse"] = {"refused": s.alone}
@@ -210,6 +211,14 @@ class SequenceSynthesis(_Proven):
                     "tap": s.alone.strategy.tap is not None,
                 }
                 record["saved"] = s.saved
+            if s.declined is not None:
+                record["correction_declined"] = {
+                    "part": s.declined.part_al,
+                    "located_by": s.declined.hole_al,
+                    "next_step_faster_by": (
+                        None if s.declined_saving == float("inf") else s.declined_saving
+                    ),
+                }
             if s.knowledge is not None:
                 k = s.knowledge
                 record["reuse"] = {

@@ -440,6 +440,15 @@ def sequence_summary(
                 f"{a.expected_time:.2f} s "
                 f"({_fine_words(a)}); saved {step.saved:.2f} s"
             )
+        if step.declined is not None:
+            kn, faster = step.declined, step.declined_saving
+            gain = (
+                "has a plan only" if faster == float("inf") else f"is planned {faster:.2f} s faster"
+            )
+            lines.append(
+                f"  {kn.part_al} is not corrected from the seated {kn.pin_al}: the next step "
+                f"{gain} on what was known before the reading"
+            )
         if step.knowledge is not None and k < len(sequence.steps):
             kn = step.knowledge
             if kn.corrected:

@@ -20,7 +20,7 @@ from _paths import DATA_TASKS, GOLDEN, SEED_TASK, TASKS
 
 from synth.cli import main
 from synth.codegen.sequence import SequenceStep, emit_sequence
-from synth.errors.seat import after_seat, seat_error
+from synth.errors.seat import after_seat, seat_error, seated
 from synth.exceptions import SpecError
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task, parse_task
@@ -33,8 +33,14 @@ from synth.pipeline import (
 from synth.replay.proof import ProofOptions
 from synth.replay.run import machine_for, replay_context, run_machine
 from synth.replay.truth import HandErrors, nominal_world, sample_world
+from synth.report import sequence_summary
 from synth.strategies.records import Rejection
-from synth.strategies.sequence import _plan_step, plan_sequence
+from synth.strategies.sequence import (
+    _hole_bounds,
+    _plan_step,
+    correction_may_hurt,
+    plan_sequence,
+)
 
 TWO = TASKS / "seed_box_two_pins.yaml"
 PLATE = TASKS / "plate_two_pins_shim.yaml"
@@ -170,7 +176,16 @@ def test_free_order_takes_the_cheaper_order():
     spec = load_task(TWO)
     chosen = synthesize(TWO, NOMINAL)
     assert isinstance(chosen, SequenceSynthesis)
-    assert chosen.sequence.order == "free" and chosen.sequence.planned == 4  # 2 + 2 step plans
+    # 2 first steps, and each second step twice: after either seat the other hole is known
+    # wider along y than before (the box's turn over the 7.7 cm from the seat, against the
+    # 3.85 cm from its origin), so it is planned without the correction too
+    first, second = spec.steps
+    for a, b in ((first, second), (second, first)):
+        learnt = after_seat(spec.step(a), a, 0.0354)
+        assert learnt is not None
+        assert correction_may_hurt(learnt.spec, seated(spec, a), b)
+    assert chosen.sequence.order == "free" and chosen.sequence.planned == 2 + 2 * 2
+    assert all(s.declined is None for s in chosen.sequence.steps)  # corrected was as fast
     # The other order, fixed, costs at least as much (h = 0: the search is exact).
     other = [s.pin for s in reversed([st.insertion for st in chosen.sequence.steps])]
     assert spec.insertions is not None
@@ -310,6 +325,50 @@ def test_a_seat_that_teaches_nothing_new_emits_no_correction():
     )
     assert program.count("BOX ← BOX*TRANS(") == 1  # the first seat's correction only
     assert "0*CM,0*CM,0*CM" not in program and "ALONG" in program
+
+
+LONG_PLATE = DATA_TASKS / "long_plate_far_hole.yaml"
+
+
+def test_a_correction_that_leaves_the_far_hole_known_worse_is_left_out():
+    spec = load_task(LONG_PLATE)
+    first, second = spec.steps
+    learnt = after_seat(spec.step(first), first, 0.0354)
+    assert learnt is not None and learnt.corrected == ("x", "y")
+    plain = seated(spec, first)
+    corrected_bounds = _hole_bounds(learnt.spec, second)
+    plain_bounds = _hole_bounds(plain, second)
+    theta = math.radians(5.0)
+    # Closed forms for BH2 at (−13, 0) cm in the plate: uncorrected, the plate's ±0.3 cm and
+    # its ±5° turn about the origin (13 sin 5° along y, 13 (1 − cos 5°) along x); corrected,
+    # the reading's half-width ε + |h|θ² at the seat h = (13, 0, 3.19) cm (seed A.3's ρ) and
+    # the turn over the 26 cm from the seat (the certified chain adds its remainder, < 0.3 %)
+    h = math.hypot(0.13, 0.0319)
+    half = learnt.epsilon + h * theta**2
+    assert plain_bounds.dy.hi == pytest.approx(0.003 + 0.13 * math.sin(theta), rel=3e-3)
+    assert plain_bounds.dx.hi == pytest.approx(0.003 + 0.13 * (1 - math.cos(theta)), rel=3e-3)
+    assert corrected_bounds.dy.hi == pytest.approx(half + 0.26 * theta, rel=3e-3)
+    assert correction_may_hurt(learnt.spec, plain, second)
+    assert not correction_may_hurt(plain, plain, second)
+
+    made = synthesize(LONG_PLATE, NOMINAL, base_dir=DATA_TASKS)
+    assert isinstance(made, SequenceSynthesis)
+    one, two = made.sequence.steps
+    assert one.knowledge is None and one.declined is not None and made.sequence.planned == 3
+    # the step as it would have been planned after the correction: slower by the saving
+    check = _step_check(DATA_TASKS, {})
+    corrected = _plan_step(
+        learnt.spec.step(second), second, two.index, two.q_start, check, None, DATA_TASKS
+    )
+    assert not isinstance(corrected, Rejection)
+    assert one.declined_saving == pytest.approx(corrected.time - two.time, rel=1e-12)
+    assert one.declined_saving > 0.5  # 6.75 s against 5.43 s when this test was written
+    assert "CORRECTED BY THE MEASURED OFFSET" not in made.program
+    record = made.to_json()["steps"][0]
+    assert record["reuse"] is None
+    assert record["correction_declined"]["next_step_faster_by"] == one.declined_saving
+    text = sequence_summary(made.sequence)
+    assert "BOX is not corrected from the seated PIN1: the next step is planned" in text
 
 
 REARRANGE = DATA_TASKS / "rearrange_two_pins.yaml"

@@ -12,6 +12,11 @@ before it leave:
 * with ``reuse``, every part a seat located carries its reduced block
   (:func:`synth.errors.seat.after_seat`), so the next footprint, tap and search are planned from
   what the program will know then (the program corrects the part's frame after the seat).
+  The correction is a reading at the seat, and a hole far from it on the other side of the
+  part's origin can be known worse after it (the turn's error over the longer lever): when the
+  next hole's error bounds are wider somewhere after the correction than before
+  (:func:`correction_may_hurt`), the next step is planned both ways and the correction kept
+  only if that step is then no slower (``declined`` on the step that seated the pin).
 
 Order (``insertions.order``): ``fixed`` runs the listed order; ``free`` searches every order
 best-first. A node is a prefix of steps with its cost g = Σ expected step times (each step's
@@ -35,16 +40,20 @@ from __future__ import annotations
 
 import heapq
 import itertools
+import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
+from synth.errors.chain import chain_between
+from synth.errors.estimate import AXIS_NAMES, ErrorBounds, estimate_errors
 from synth.errors.seat import SeatKnowledge, after_seat, seated
 from synth.exceptions import NoStrategyError
-from synth.models.spec import InsertionSpec, TaskSpec
+from synth.models.graph import AttributeGraph
+from synth.models.spec import WORLD, InsertionSpec, TaskSpec
 from synth.strategies.causes import root_cause
 from synth.strategies.options import PlanOptions
 from synth.strategies.planner import plan_task
@@ -70,7 +79,9 @@ class StepPlan:
 
     ``alone`` is the same step planned without the earlier steps' knowledge (same start, same
     pins standing), for the report of what reuse saved: its plan, or the first line of its
-    refusal; None when not compared.
+    refusal; None when not compared. ``declined`` is the knowledge of this step's seat whose
+    correction the program leaves out, since the next step planned ``declined_saving`` [s]
+    faster without it (``knowledge`` is then None).
     """
 
     index: int
@@ -81,6 +92,8 @@ class StepPlan:
     q_start: NDArray[np.float64] | None
     q_end: NDArray[np.float64]
     alone: PlanResult | str | None = None
+    declined: SeatKnowledge | None = None
+    declined_saving: float = 0.0
 
     @property
     def strategy(self) -> PinInHoleStrategy:
@@ -134,6 +147,8 @@ class _Node:
     parent: _Node | None = field(default=None, compare=False)
     banned: frozenset[str] = field(default=frozenset(), compare=False)
     """Strategies its last step gave up (each left every next step without a plan)."""
+    plain: TaskSpec | None = field(default=None, compare=False)
+    """``believed`` without the last step's correction (None: it made none)."""
 
 
 def plan_sequence(
@@ -154,20 +169,20 @@ def plan_sequence(
     counter = itertools.count()
     frontier = [_Node(0.0, next(counter), (), (), spec, None)]
     rejected: list[Rejection] = []
-    expanded = planned = 0
+    expanded = 0
+    plans = _Plans()
     while frontier:
         node = heapq.heappop(frontier)
         if len(node.done) == len(steps):
             chosen = node.steps
             if compare and reuse:
                 chosen = tuple(_compared(s, spec, node, options, base_dir) for s in chosen)
-            return SequencePlan(spec, chosen, order, expanded, planned, reuse, tuple(rejected))
+            return SequencePlan(spec, chosen, order, expanded, plans.made, reuse, tuple(rejected))
         expanded += 1
         remaining = [i for i in range(len(steps)) if i not in node.done]
         grown = False
         for i in remaining if order == "free" else remaining[:1]:
-            planned += 1
-            child = _grown(node, i, steps[i], check, options, base_dir, reuse, next(counter))
+            child = _grown(node, i, steps[i], check, options, base_dir, reuse, next(counter), plans)
             if isinstance(child, Rejection):
                 rejected.append(child)
             else:
@@ -177,7 +192,6 @@ def plan_sequence(
         if grown or parent is None or len(node.banned) >= STEP_ALTERNATIVES:
             continue
         last = node.steps[-1]
-        planned += 1
         banned = node.banned | {last.strategy.name}
         sibling = _grown(
             parent,
@@ -188,6 +202,7 @@ def plan_sequence(
             base_dir,
             reuse,
             next(counter),
+            plans,
             banned,
         )
         if isinstance(sibling, Rejection):
@@ -196,6 +211,12 @@ def plan_sequence(
             heapq.heappush(frontier, sibling)
     root = root_cause(rejected)
     raise NoStrategyError(spec.name, tuple(rejected), root)
+
+
+@dataclass
+class _Plans:
+    made: int = 0
+    """Step plans made (a step planned with and without the last correction counts two)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -207,6 +228,10 @@ class _Made:
     def strategy(self) -> PinInHoleStrategy:
         return self.plan.strategy
 
+    @property
+    def time(self) -> float:
+        return self.plan.strategy.expected_time
+
 
 def _grown(
     node: _Node,
@@ -217,30 +242,66 @@ def _grown(
     base_dir: Path | str | None,
     reuse: bool,
     tie: int,
+    plans: _Plans,
     banned: frozenset[str] = frozenset(),
 ) -> _Node | Rejection:
-    """``node`` with step ``index`` planned next (its ``banned`` strategies refused)."""
-    task = node.believed.step(insertion)
+    """``node`` with step ``index`` planned next (its ``banned`` strategies refused).
+
+    When the last step's correction may leave this step's hole known worse
+    (:func:`correction_may_hurt`), the step is planned without it too, and the faster plan
+    taken (the corrected one on a tie): without, the last step is marked ``declined``.
+    """
+    base, earlier = node.believed, node.steps
+    task = base.step(insertion)
     made = _plan_step(task, insertion, index, node.q, check, options, base_dir, banned)
+    plans.made += 1
+    if node.plain is not None and correction_may_hurt(base, node.plain, insertion):
+        plans.made += 1
+        plain_task = node.plain.step(insertion)
+        other = _plan_step(plain_task, insertion, index, node.q, check, options, base_dir, banned)
+        if isinstance(other, _Made) and (isinstance(made, Rejection) or other.time < made.time):
+            last = earlier[-1]
+            saving = math.inf if isinstance(made, Rejection) else made.time - other.time
+            declined = replace(
+                last, knowledge=None, declined=last.knowledge, declined_saving=saving
+            )
+            base, earlier, task, made = node.plain, (*earlier[:-1], declined), plain_task, other
     if isinstance(made, Rejection):
         return made
-    knowledge = after_seat(task, insertion, made.strategy.pickup.grasp.distance)
-    believed = (
-        knowledge.spec if (reuse and knowledge is not None) else seated(node.believed, insertion)
-    )
-    step = StepPlan(
-        index, insertion, task, made.plan, knowledge if reuse else None, node.q, made.q_end
-    )
+    knowledge = after_seat(task, insertion, made.strategy.pickup.grasp.distance) if reuse else None
+    plain = seated(base, insertion)
+    step = StepPlan(index, insertion, task, made.plan, knowledge, node.q, made.q_end)
     return _Node(
         node.cost + step.time,
         tie,
         (*node.done, index),
-        (*node.steps, step),
-        believed,
+        (*earlier, step),
+        plain if knowledge is None else knowledge.spec,
         made.q_end,
         node,
         banned,
+        None if knowledge is None else plain,
     )
+
+
+def correction_may_hurt(corrected: TaskSpec, plain: TaskSpec, insertion: InsertionSpec) -> bool:
+    """Whether the hole's error bounds (world to hole, certified) are wider somewhere corrected.
+
+    Each of the six components and the tilt is compared (the corrected ones may be narrower
+    along some and wider along others); a hole no wider anywhere is planned for corrected only.
+    """
+    corrected_bounds, plain_bounds = (_hole_bounds(spec, insertion) for spec in (corrected, plain))
+    for name in AXIS_NAMES:
+        a, b = getattr(corrected_bounds, name), getattr(plain_bounds, name)
+        if a.hi - a.lo > (b.hi - b.lo) * (1.0 + 1e-9):
+            return True
+    return corrected_bounds.tilt > plain_bounds.tilt * (1.0 + 1e-9)
+
+
+def _hole_bounds(spec: TaskSpec, insertion: InsertionSpec) -> ErrorBounds:
+    graph = AttributeGraph(spec)
+    hole = graph.resolve(insertion.hole)
+    return estimate_errors(chain_between(graph, WORLD, hole)).certified
 
 
 def _plan_step(
@@ -296,13 +357,4 @@ def _compared(
         )
     except NoStrategyError as exc:
         alone = str(exc).splitlines()[0]
-    return StepPlan(
-        step.index,
-        step.insertion,
-        step.task,
-        step.plan,
-        step.knowledge,
-        step.q_start,
-        step.q_end,
-        alone,
-    )
+    return replace(step, alone=alone)
