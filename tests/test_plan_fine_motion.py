@@ -21,13 +21,14 @@ from _paths import DATA_TASKS, TASKS
 from _tasks import synthesized
 
 from synth.codegen.emitter import emit_program
-from synth.exceptions import SynthError
+from synth.exceptions import NoStrategyError, SynthError
 from synth.models.arm import CollisionScene, nearest_solution
 from synth.models.believed import believed_graph
 from synth.models.loader import load_task
 from synth.models.workcell import NominalPoses, WorkcellModel
 from synth.replay.run import replay_context, run_trial
 from synth.replay.trace import record_run
+from synth.strategies import fine
 from synth.strategies.clearance import GrossMotionCheck
 from synth.strategies.context import plan_context
 from synth.strategies.planner import plan_task
@@ -217,3 +218,38 @@ def test_a_wrist_link_keeps_the_grips_error_from_the_part(monkeypatch) -> None:
     assert plan.strategy.pickup.grasp.gamma != pytest.approx(100 * DEG)
     refusals = [r.reason for r in plan.rejected if "γ=100°" in r.candidate]
     assert any("sweeps wrist_3_link_0 into BOX" in r for r in refusals)
+
+
+def test_the_seated_hand_keeps_the_holes_error_from_a_wall(monkeypatch) -> None:
+    # A block 8 cm tall stands 2.25 cm beyond the box's edge, 3.1 cm from BH1. The search ends
+    # with the pin in the true hole, so the hand stops up to the hole's world error from its
+    # believed seat: closed form along x, the box's 0.3 in and its ±2° turn at 3.6 cm from its
+    # origin, 0.762 + 3.6 (1 − cos 2°) cm; along y 0.254 + 3.6 sin 2° cm; then the hand's
+    # 0.05 in. Without that margin the fingers opening at the seat came 0.66–0.97 cm from NB
+    # in the plan, and hit it in trial 46 of seed 3 (box x +0.67 cm).
+    spec = load_task(DATA_TASKS / "wall_beside_the_seat.yaml")
+    ctx = plan_context(spec)
+    seat = fine.seated_hand_displacement(ctx)
+    hand = 0.05 * 2.54 / 100
+    theta = math.radians(2.0)
+    exact = np.array([0.00762 + 0.036 * (1 - math.cos(theta)), 0.00254 + 0.036 * math.sin(theta)])
+    # the certified chain adds its second-order remainder (< 0.1 %) to the exact reach
+    assert np.all(seat.translation[:2] >= exact + hand - 1e-12)
+    assert seat.translation[:2] == pytest.approx(exact + hand, rel=1e-3)
+    assert seat.translation[2] == pytest.approx(hand)  # the box's height is exact
+
+    seated_options = GrossMotionCheck.seated_options
+    monkeypatch.setattr(
+        GrossMotionCheck,
+        "seated_options",
+        lambda self, graph, part, hand, seat: self.fine_options(part, hand),
+    )
+    unchecked = plan_task(spec).strategy
+    monkeypatch.setattr(GrossMotionCheck, "seated_options", seated_options)
+    context = replay_context(emit_program(unchecked, believed_graph(spec)), spec)
+    hit = run_trial(context, 3, 46)
+    assert hit.outcome == "violation" and "opening the fingers: finger_right hit NB" in hit.message
+    with pytest.raises(NoStrategyError) as refused:
+        plan_task(spec)
+    reasons = dict(refused.value.reasons)
+    assert "the let-go in BH1 sweeps finger_right into NB" in reasons[unchecked.name]

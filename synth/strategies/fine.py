@@ -38,8 +38,11 @@ from collections.abc import Sequence
 import numpy as np
 import pinocchio as pin
 
+from synth.errors.chain import chain_between
+from synth.errors.estimate import estimate_errors
 from synth.models.arm import CollisionScene, SweepOptions
-from synth.models.spec import BoxShape
+from synth.models.arm.sweep import LinkDisplacement
+from synth.models.spec import WORLD, BoxShape
 from synth.strategies.approach import Candidate, hand_at
 from synth.strategies.context import Configuration, PlanContext
 from synth.strategies.records import Destination, PinInHoleStrategy
@@ -138,6 +141,8 @@ def fine_motion_obstruction(
         if reason is not None:
             return reason
     seated = _pin_world(ctx, strategy.destination)
+    hand_seated = ctx.arm.forward(cand.q_destination).rotation
+    options = gross.seated_options(ctx.graph, part, hand_seated, seated_hand_displacement(ctx))
     turns = [None, *gross.seat_turns(ctx.graph, ctx.hole_frame, ctx.world_hole.translation)]
     scenes = [(t, gross.letting_go(strategy.let_go_opening, seated, part, t)) for t in turns]
     for turn, scene in scenes:
@@ -162,6 +167,25 @@ def fine_motion_obstruction(
         if reason is not None:
             return reason
     return None
+
+
+def seated_hand_displacement(ctx: PlanContext) -> LinkDisplacement:
+    """How far the seated hand may truly be from its believed seat, per world direction.
+
+    The search and the guarded move end with the pin in the true hole, and the pin sits in the
+    hand where the hand closed on it: so the hand stops off its believed seat by the hole's
+    world error (``world⁻¹ ∘ hole``, certified, along each world axis; the part's turn about
+    the seat is swept apart, :meth:`~synth.strategies.clearance.GrossMotionCheck.seat_turns`)
+    and by the grip's, within the hand's largest translation tolerance along any axis. The
+    hand's own turn is the wrist links' grip bound
+    (:meth:`~synth.strategies.clearance.GrossMotionCheck.fine_options`); a ball about the seat
+    holding the arm's bodies would charge a Panda's forearm its 49 cm at the hand's 0.5°.
+    """
+    bounds = estimate_errors(chain_between(ctx.graph, WORLD, ctx.hole_frame)).certified
+    hand = {} if ctx.hand_error is None else ctx.hand_error.bounds()
+    shift = max((max(-hand[n].lo, hand[n].hi) for n in ("x", "y", "z") if n in hand), default=0.0)
+    hole = np.array([bounds.dx.magnitude, bounds.dy.magnitude, bounds.dz.magnitude])
+    return LinkDisplacement(np.eye(3), hole + shift, np.zeros(3), 0.0)
 
 
 def seat_displacements(ctx: PlanContext, strategy: PinInHoleStrategy) -> list[tuple[str, pin.SE3]]:
