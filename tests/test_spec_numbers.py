@@ -261,3 +261,15 @@ def test_cli_refuses_extreme_quantities_with_exit_2(
         err = capsys.readouterr().err
         assert code == 2, err
         assert f"frames[{i}].pose.translation[0]" in err and message in err
+
+
+def test_a_hole_in_no_part_is_refused_at_its_parent() -> None:
+    # The seed's box without its shape: BH1 is drilled into nothing. The planner crashed on it
+    # (KeyError 'world', exit 70; a 500 from the service) looking for the part's floor.
+    data = seed()
+    _, box = frame(data, "box")
+    del box["shape"]
+    err = refused(data)
+    i, _ = frame(data, "bh1")
+    assert err.path == f"frames[{i}].parent"
+    assert err.detail.startswith("hole 'bh1' is in no part")

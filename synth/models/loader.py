@@ -303,7 +303,9 @@ def _check_holes_fit(spec: TaskSpec, fail: Any) -> None:
     The replay drills it with :func:`synth.models.meshes.box_with_holes`; its rule
     (:func:`~synth.models.meshes.hole_problem`: the mouth, of radius diameter/2 +
     chamfer_width, strictly inside the face) is checked here at the nominal pose. Holes
-    elsewhere are left to the workcell, which names them.
+    elsewhere are left to the workcell, which names them. A hole in no part (no frame above
+    it has a box shape) is refused: there is nothing to drill it into (the planner crashed on
+    one, looking for the part's floor).
     """
     graph = AttributeGraph(spec)
     for i, f in enumerate(spec.frames):
@@ -311,7 +313,13 @@ def _check_holes_fit(spec: TaskSpec, fail: Any) -> None:
         if shape is None or shape.type != "hole":
             continue
         owner = graph.owner(f.name)
-        box = graph.nodes[owner].shape if owner != WORLD else None
+        if owner == WORLD:
+            fail(
+                ("frames", i, "parent"),
+                f"hole {f.name!r} is in no part: no frame from {f.parent!r} up to the world "
+                "has a box shape to drill it into",
+            )
+        box = graph.nodes[owner].shape
         if box is None or box.type != "box":
             continue
         local = graph.relative(owner, f.name)
