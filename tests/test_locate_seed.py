@@ -55,6 +55,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 from _paths import BOX_FIXTURE_TASK, SEED_TASK, TASKS
 from scipy.optimize import brentq, minimize
 
@@ -529,6 +530,23 @@ def test_cli_locate_bad_input_exits_2(tmp_path: Path, capsys: pytest.CaptureFixt
     assert main(["locate", str(bad)]) == 2
     err = capsys.readouterr().err
     assert "contacts[2].a (line" in err and "no feature 'edge9'" in err
+
+
+def test_cli_locate_contacts_that_admit_no_pose_exit_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # box1 made 20 cm long, in a fixture 8 × 10 cm inside: the pose LP is
+    # infeasible, the report says so, and the exit code was 0
+    text = Path(FIXTURE).read_text()
+    data = yaml.safe_load(text)
+    box1 = next(f for f in data["frames"] if f["name"] == "box1")
+    box1["shape"]["size"][0] = "20 cm"
+    bad = tmp_path / "wide.yaml"
+    bad.write_text(yaml.safe_dump(data, sort_keys=False))
+    assert main(["locate", str(bad)]) == 2
+    out, err = capsys.readouterr()
+    assert "no pose satisfies these contacts" in out
+    assert "no pose satisfies the contacts of box1" in err
 
 
 def test_plan_uses_the_located_box(capsys: pytest.CaptureFixture[str]) -> None:

@@ -159,6 +159,21 @@ def test_cli_writes_the_view(tmp_path: Path) -> None:
     assert main(["view", str(SEED_TASK), str(tmp_path / "missing.al"), "-o", str(out)]) == 2
 
 
+def test_the_view_to_dash_goes_to_standard_output(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # "-o -" wrote a file named "-" in the working directory, which a later "synth plan -"
+    # run there could read as its task
+    monkeypatch.chdir(tmp_path)
+    al = tmp_path / "seed.al"
+    al.write_text(synthesized(SEED_TASK).program, encoding="utf-8")
+    assert main(["view", str(SEED_TASK), str(al), "-o", "-"]) == 0
+    out, err = capsys.readouterr()
+    assert out.startswith("<!DOCTYPE html>") and "synth view" in out
+    assert "written to standard output (nominal run: success" in err
+    assert not (tmp_path / "-").exists()
+
+
 def test_a_program_that_never_moves_is_refused_with_why(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

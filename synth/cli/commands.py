@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from typing import Any
 
 from synth.cli.arguments import COUNT, PORT, add_workers_argument, resolve_workers
@@ -39,6 +40,11 @@ def _cmd_locate(args: argparse.Namespace) -> int:
         print(json.dumps({"task": spec.name, "objects": [r.to_json() for r in results]}, indent=2))
     else:
         print(locate_report(results, AttributeGraph(spec), constraints=args.constraints))
+    unplaced = [r.problem.obj for r in results if not r.estimates]
+    if unplaced:  # contacts that contradict each other or the sizes: the task is bad input
+        names = ", ".join(unplaced)
+        print(f"synth locate: error: no pose satisfies the contacts of {names}", file=sys.stderr)
+        return 2
     return 0
 
 
@@ -73,9 +79,11 @@ def _cmd_view(args: argparse.Namespace) -> int:
     trace = record_run(context, program=name)
     write_output(args.output, view_html(view_scene(context, trace, text)).encode("utf-8"))
     report = trace.report
+    where = "standard output" if args.output == "-" else args.output
     print(
-        f"view of {name} on {spec.name} written to {args.output} "
-        f"(nominal run: {report.outcome}, {report.time:.2f} s, {len(trace.samples)} frames)"
+        f"view of {name} on {spec.name} written to {where} "
+        f"(nominal run: {report.outcome}, {report.time:.2f} s, {len(trace.samples)} frames)",
+        file=sys.stderr if args.output == "-" else sys.stdout,
     )
     return 0
 
@@ -145,7 +153,11 @@ def add_view_parser(sub: Any) -> None:
         help="the AL program to show (default: plan the task and show its program)",
     )
     p.add_argument(
-        "-o", "--output", default="view.html", metavar="VIEW.html", help="default: view.html"
+        "-o",
+        "--output",
+        default="view.html",
+        metavar="VIEW.html",
+        help="default: view.html; '-': to standard output (the summary to standard error)",
     )
     p.add_argument(
         "--proof-trials",

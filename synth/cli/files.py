@@ -9,7 +9,21 @@ from synth.exceptions import SynthError
 
 
 def write_output(path: str, data: bytes) -> None:
-    """Write an output file (its directory made as needed); a usage error when it cannot."""
+    """Write an output file (its directory made as needed); a usage error when it cannot.
+
+    ``-`` is standard output, as it is for every path the command line reads or writes (it
+    wrote a file named ``-``).
+    """
+    if path == "-":
+        stdout = sys.stdout
+        binary = getattr(stdout, "buffer", None)
+        if binary is not None:
+            stdout.flush()
+            binary.write(data)
+            binary.flush()
+        else:
+            stdout.write(data.decode("utf-8"))
+        return
     out = Path(path)
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
