@@ -93,6 +93,26 @@ def _reject_non_finite(value: str) -> float:
     raise ValueError(f"{value} is not a JSON number")
 
 
+class _DuplicateKey(ValueError):
+    def __init__(self, key: str) -> None:
+        super().__init__(key)
+        self.key = key
+
+
+def _unique_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """A JSON object's members, refusing a key given twice (json keeps the last silently).
+
+    The same task as YAML is refused at the key's line (the loader's rule); as JSON its second
+    ``insertion`` won, and the program went into another hole.
+    """
+    out: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in out:
+            raise _DuplicateKey(key)
+        out[key] = value
+    return out
+
+
 def parse_spec(body: bytes | str | dict[str, Any], kind: SpecKind = "yaml") -> TaskSpec:
     """A validated :class:`TaskSpec` from a request body (bytes/str) or an inline JSON object.
 
@@ -115,9 +135,15 @@ def parse_spec(body: bytes | str | dict[str, Any], kind: SpecKind = "yaml") -> T
         raise SpecError("", "empty body: send a task spec (YAML or JSON)")
     if kind == "json":
         try:
-            data = json.loads(text, parse_constant=_reject_non_finite)
+            data = json.loads(
+                text, parse_constant=_reject_non_finite, object_pairs_hook=_unique_keys
+            )
         except json.JSONDecodeError as exc:
             raise SpecError("", f"JSON syntax error: {exc.msg}", exc.lineno) from None
+        except _DuplicateKey as exc:
+            raise SpecError(
+                exc.key, f"the key {exc.key!r} is given twice in one JSON object"
+            ) from None
         except (ValueError, RecursionError) as exc:
             raise SpecError("", f"invalid JSON: {exc}") from None
         if not isinstance(data, dict):

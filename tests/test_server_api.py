@@ -98,6 +98,26 @@ def test_json_spec_error_names_field(client: TestClient) -> None:
     assert body["path"] == "insertion.dr_ok"
 
 
+def test_a_json_key_given_twice_is_refused_as_in_yaml(client: TestClient) -> None:
+    # json.loads keeps the last of two keys: a second "insertion" into BH2 was planned (201)
+    # where the same YAML is a 422 naming the key
+    data = yaml.safe_load(SEED_TEXT)
+    text = json.dumps(data)
+    second = json.dumps({"pin": "PIN1", "hole": "BH2", "start_hole": "RH1"})
+    twice = text[:-1] + f', "insertion": {second}}}'
+    assert json.loads(twice)["insertion"]["hole"] == "BH2"  # the silent last-wins
+    body = problem(
+        client.post(
+            "/v1/plans?validate=false",
+            content=twice.encode("utf-8"),
+            headers={"Content-Type": "application/json"},
+        ),
+        422,
+    )
+    assert body["path"] == "insertion"
+    assert "the key 'insertion' is given twice" in str(body["detail"])
+
+
 def test_json_syntax_error_has_line(client: TestClient) -> None:
     body = problem(
         client.post(
