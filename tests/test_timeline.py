@@ -30,7 +30,7 @@ from synth.al.interpreter import Interpreter
 from synth.al.machine import DurationConstraint, IdealMachine, MachineCommand
 from synth.al.parser import parse_program
 from synth.al.timeline import segment_times
-from synth.replay import machine_for, replay_context
+from synth.replay import machine_for, replay_context, replay_program
 from synth.replay.truth import HandErrors, nominal_world
 
 OZ = 0.27801385095378626  # [N] one ounce-force: 0.028349523125 kg × 9.80665 m/s²
@@ -106,3 +106,31 @@ def test_a_stop_on_a_force_monitor_keeps_the_force_where_it_fired() -> None:
     blocked = Blocked(segment_time=2.0)
     run_ideal("MOVE BLUE TO BLUE+VECTOR(0,0,-4);", blocked)
     assert blocked.force(np.array([0.0, 0.0, 1.0])) == pytest.approx(10 * OZ, rel=1e-12)
+
+
+_UP = "MOVE BMANIP TO BPARK*TRANS(NILROTN,VECTOR(0,0,5)*CM)"
+
+
+def test_a_duration_shorter_than_the_arms_fastest_is_a_violation() -> None:
+    # The timeline scales a motion's segments to any WITH DURATION: 5 cm in 1 ms (50 m/s) ran,
+    # and the replay reported success. The time-optimal motion at the joint limits (ruckig,
+    # the time the replay gives an unconstrained move) is the least the arm can take.
+    free = replay_program(f"{_UP};\n", SEED_TASK)
+    # the program leaves the pin in its rack: the goal is unmet, the motion itself fine
+    assert free.nominal.outcome == "failure" and free.nominal.violations == ()
+    fastest = free.nominal.time
+    fast = replay_program(f"{_UP} WITH DURATION = 0.001*SEC;\n", SEED_TASK).nominal
+    assert fast.outcome == "violation" and fast.line == 1
+    assert fast.violations[0].kind == "too_fast"
+    assert f"the arm needs {fastest:.4g} s" in fast.message
+    # A longer one stretches it: the run takes what it asks
+    slow = replay_program(f"{_UP} WITH DURATION = {2 * fastest:.6f}*SEC;\n", SEED_TASK).nominal
+    assert slow.outcome == "failure" and slow.violations == ()
+    assert slow.time == pytest.approx(2 * fastest, abs=1e-6)
+
+
+@pytest.mark.parametrize("seconds", ["0", "-3"])
+def test_a_duration_that_is_not_positive_is_a_runtime_error(seconds: str) -> None:
+    report = replay_program(f"{_UP} WITH DURATION = {seconds}*SEC;\n", SEED_TASK).nominal
+    assert report.outcome == "error" and report.line == 1
+    assert f"DURATION = {seconds} s: a motion takes a positive time" in report.message

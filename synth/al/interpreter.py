@@ -806,6 +806,11 @@ class Interpreter:
                 return TorqueConstraint(direction, value, segment, c.line)
             if isinstance(left, ast.Name) and left.name == "DURATION":
                 seconds = self._dimensioned(right, cx, TIME, "a duration")
+                if relation in ("=", "<", "≤") and not seconds > 0.0:
+                    # the timeline would run the motion in no time or backwards
+                    raise self._error(
+                        c, f"DURATION {relation} {seconds:g} s: a motion takes a positive time"
+                    )
                 return DurationConstraint(relation, seconds, segment, c.line)
         raise self._error(c, "a WITH condition is FORCE(v) = f, TORQUE(v) = t or DURATION rel t")
 

@@ -275,6 +275,14 @@ class ReplayMachine(TimelineMachine[Motion]):
                 self._violation(problem.kind, line, f"{which}: {problem.detail}", self._time)
             )
         times = segment_times(list(durations), constraints)
+        for k, (wanted, fastest) in enumerate(zip(times, durations, strict=True)):
+            if wanted < fastest * (1.0 - 1e-9):  # WITH DURATION squeezed it
+                which = "the motion" if len(times) == 1 else f"segment {k + 1} of the motion"
+                detail = (
+                    f"WITH DURATION asks {which} to take {wanted:.4g} s; at its joint limits "
+                    f"the arm needs {fastest:.4g} s"
+                )
+                self._raise(self._violation("too_fast", line, detail, self._time))
         errors = [self._error] + [self.hand_errors.next() for _ in targets]
         segments = []
         t = 0.0

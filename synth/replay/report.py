@@ -38,7 +38,7 @@ __all__ = [
     "wilson_interval",
 ]
 
-ViolationKind = Literal["unreachable", "joint_limit", "collision", "wedged"]
+ViolationKind = Literal["unreachable", "joint_limit", "collision", "wedged", "too_fast"]
 Outcome = Literal["success", "failure", "abort", "violation", "error"]
 OUTCOMES: tuple[Outcome, ...] = ("success", "failure", "abort", "violation", "error")
 
