@@ -261,6 +261,13 @@ def test_diagnostic_options_are_checked(capsys: pytest.CaptureFixture[str]) -> N
     for extra, reason in (((), "--trials is 0"), (("--trial", "3"), "--trial I re-runs one")):
         assert main(_replay_args(0 if not extra else 2, *extra, "--min-success", "0.9")) == 2
         assert f"--min-success compares a Monte Carlo rate, but {reason}" in capsys.readouterr().err
+    # Options the run would ignore are refused, not dropped (--trials was, with --trial)
+    assert main(_replay_args(50, "--trial", "3")) == 2
+    assert "--trial I re-runs one trial of --seed alone; --trials does not apply" in (
+        capsys.readouterr().err
+    )
+    assert main(["replay", "--task", str(SEED_TASK), "--preamble", "--json"]) == 2
+    assert "--preamble prints AL declarations; --json does not apply" in capsys.readouterr().err
 
 
 def test_a_reader_that_closes_the_pipe_ends_the_replay_quietly() -> None:

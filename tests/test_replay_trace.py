@@ -90,8 +90,8 @@ def test_trace_json_and_cli(tmp_path: Path, program: str) -> None:
     al = tmp_path / "seed.al"
     al.write_text(program, encoding="utf-8")
     out = tmp_path / "trace.json"
-    args = ["replay", str(al), "--task", str(SEED_TASK), "--trials", "0", "--workers", "1"]
-    assert main([*args, "--trace", str(out)]) == 0
+    args = ["replay", str(al), "--task", str(SEED_TASK), "--workers", "1"]
+    assert main([*args, "--trials", "0", "--trace", str(out)]) == 0
     doc = json.loads(out.read_text())
     assert doc["schema"] == SCHEMA and doc["trial"] is None
     assert len(doc["joints"]) == len(doc["samples"][0]["q"]) == 6

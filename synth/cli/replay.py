@@ -52,6 +52,8 @@ def _cmd_replay(args: argparse.Namespace) -> int:
     from synth.models.loader import load_task
 
     if args.preamble:
+        if args.json:
+            raise SynthError("--preamble prints AL declarations; --json does not apply")
         from synth.codegen.binding import preamble
         from synth.models.believed import believed_graph
 
@@ -161,6 +163,10 @@ def _check_diagnostics(args: argparse.Namespace) -> None:
         # a rate needs trials: with none (or one re-run alone) the bound would never be checked
         alone = "--trial I re-runs one trial" if args.trial is not None else "--trials is 0"
         raise SynthError(f"--min-success compares a Monte Carlo rate, but {alone}")
+    if args.trial is not None and args.trials is not None:
+        raise SynthError("--trial I re-runs one trial of --seed alone; --trials does not apply")
+    if args.trials is None:
+        args.trials = DEFAULT_TRIALS
 
 
 def _run_one(args: argparse.Namespace, text: str) -> int:
@@ -272,7 +278,7 @@ def add_replay_parser(sub: Any) -> None:
     p.add_argument(
         "--trials",
         type=COUNT,
-        default=DEFAULT_TRIALS,
+        default=None,  # DEFAULT_TRIALS when not given: --trial refuses it given
         help=f"Monte Carlo trials in sampled true worlds (default: {DEFAULT_TRIALS}; 0: none)",
     )
     p.add_argument("--seed", type=SEED, default=0, help="random seed of the trials (default: 0)")
