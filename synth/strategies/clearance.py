@@ -299,12 +299,18 @@ class GrossMotionCheck:
         sensor, and keep the clearance only. Without ``seated_hand``, none.
         """
         displacements = {k: v for k, v in self.fine_motion.displacements.items() if k != part}
-        if seated_hand is not None and self.hand_error is not None:
-            grip = link_displacement(self.hand_error, seated_hand, 0.0)
-            grip = replace(grip, translation=grip.translation * np.array([0.0, 1.0, 1.0]))
+        grip = None if seated_hand is None else self._grip(seated_hand)
+        if grip is not None:
             for name, radius in self.wrist_radii.items():
                 displacements[name] = Displacement((replace(grip, radius=radius),))
         return SweepOptions(displacements=displacements, rigid=self.fine_motion.rigid)
+
+    def _grip(self, seated_hand: NDArray[np.float64]) -> LinkDisplacement | None:
+        """The pin's place in the hand: the pickup's hand error less CENTER's x (hand frame)."""
+        if self.hand_error is None:
+            return None
+        grip = link_displacement(self.hand_error, seated_hand, 0.0)
+        return replace(grip, translation=grip.translation * np.array([0.0, 1.0, 1.0]))
 
     def seated_options(
         self,
@@ -316,25 +322,29 @@ class GrossMotionCheck:
         """:meth:`fine_options` once the hole holds the pin: the hand where the hole truly is.
 
         The hand stops where the search found the true hole, displaced from its believed seat
-        by up to ``seat`` (:func:`synth.strategies.fine.seated_hand_displacement`); a solid
-        that does not move with the part stands off the hand by that as well as by its own
-        error (a block 2.25 cm beyond the box's edge, 8 cm tall: the fingers opening at a seat
-        up to 0.76 cm nearer it than believed hit it in 1–2 % of the replay's worlds, and the
-        proof passed 198 of 200). A solid that shares an uncertain link with the part (what
-        stands on it, a fixture that holds it) moves with the hole as well and keeps its own
-        margin only.
+        by up to ``seat`` (the hole's world error,
+        :func:`synth.strategies.fine.seated_hand_displacement`) and by the grip (the pickup's
+        hand error less what CENTER takes out along the fingers, in the hand's frame, without
+        its turn: the wrist links carry that). A solid that does not move with the part
+        stands off the hand by both as well as by its own error: a block 2.25 cm beyond the
+        box's edge, 8 cm tall, was hit by the fingers opening at a seat up to 0.76 cm nearer
+        it than believed in 0.5–2 % of the replay's worlds, and the proof passed 198 of 200.
+        A solid that shares an uncertain link with the part (what stands on it, a fixture
+        that holds it) moves with the hole as well and keeps its own margin only.
         """
         options = self.fine_options(part, seated_hand)
         part_frame = None if part is None else self.solid_frames.get(part)
         shared = set() if part_frame is None else _uncertain_links(graph, part_frame)
         displacements = dict(options.displacements)
+        grip = self._grip(seated_hand)
+        hand = (seat,) if grip is None else (seat, replace(grip, angles=np.zeros(3)))
         for obstacle in self.solids:
             name = obstacle.name
             frame = self.solid_frames.get(name)
             if name == part or (frame is not None and shared & _uncertain_links(graph, frame)):
                 continue
             own = displacements.get(name)
-            displacements[name] = Displacement((*(() if own is None else own.links), seat))
+            displacements[name] = Displacement((*(() if own is None else own.links), *hand))
         return replace(options, displacements=displacements)
 
     def support_of(self, graph: AttributeGraph, part: str) -> str:

@@ -170,22 +170,20 @@ def fine_motion_obstruction(
 
 
 def seated_hand_displacement(ctx: PlanContext) -> LinkDisplacement:
-    """How far the seated hand may truly be from its believed seat, per world direction.
+    """How far the hole holding the pin may truly be from its believed place, per world axis.
 
-    The search and the guarded move end with the pin in the true hole, and the pin sits in the
-    hand where the hand closed on it: so the hand stops off its believed seat by the hole's
-    world error (``world⁻¹ ∘ hole``, certified, along each world axis; the part's turn about
-    the seat is swept apart, :meth:`~synth.strategies.clearance.GrossMotionCheck.seat_turns`)
-    and by the grip's, within the hand's largest translation tolerance along any axis. The
-    hand's own turn is the wrist links' grip bound
+    The search and the guarded move end with the pin in the true hole, so the hand stops off
+    its believed seat by the hole's world error (``world⁻¹ ∘ hole``, certified, along each
+    world axis; the part's turn about the seat is swept apart,
+    :meth:`~synth.strategies.clearance.GrossMotionCheck.seat_turns`), and by the grip
+    (:meth:`~synth.strategies.clearance.GrossMotionCheck.seated_options` adds it): the arm's
+    error at the approach cancels. The hand's own turn is the wrist links' grip bound
     (:meth:`~synth.strategies.clearance.GrossMotionCheck.fine_options`); a ball about the seat
     holding the arm's bodies would charge a Panda's forearm its 49 cm at the hand's 0.5°.
     """
     bounds = estimate_errors(chain_between(ctx.graph, WORLD, ctx.hole_frame)).certified
-    hand = {} if ctx.hand_error is None else ctx.hand_error.bounds()
-    shift = max((max(-hand[n].lo, hand[n].hi) for n in ("x", "y", "z") if n in hand), default=0.0)
     hole = np.array([bounds.dx.magnitude, bounds.dy.magnitude, bounds.dz.magnitude])
-    return LinkDisplacement(np.eye(3), hole + shift, np.zeros(3), 0.0)
+    return LinkDisplacement(np.eye(3), hole, np.zeros(3), 0.0)
 
 
 def seat_displacements(ctx: PlanContext, strategy: PinInHoleStrategy) -> list[tuple[str, pin.SE3]]:
