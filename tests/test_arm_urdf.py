@@ -9,8 +9,9 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
+from _paths import SEED_TASK
 
-from synth.exceptions import ArmModelError
+from synth.exceptions import ArmModelError, SpecError
 from synth.models.arm import (
     CollisionScene,
     build_ik,
@@ -18,8 +19,10 @@ from synth.models.arm import (
     load_arm,
     load_urdf_arm,
     solve_ik,
+    task_arm,
 )
 from synth.models.catalog import ROBOTS_EXTRA
+from synth.models.loader import load_task
 from synth.models.manipulator import ArmSpec, HandSpec
 
 ROBOTS = example_robot_data_dir()
@@ -257,3 +260,25 @@ def test_pinocchio_reads_the_srdf_pairs_the_file_lists():
     assert arm.disabled_pairs == apart and len(apart) >= 8
     with pytest.raises(ArmModelError, match="SRDF file not found"):
         load_arm(ur5_spec().model_copy(update={"srdf": "nosuch.srdf"}))
+
+
+def test_a_task_whose_urdf_is_not_one_names_its_field_and_line(tmp_path: Path) -> None:
+    # The message named the file only ("/…/arm.urdf: cannot build the model: …"), not the
+    # task's field and line; a tool frame the file lacks is the tool_frame's fault
+    (tmp_path / "arm.urdf").write_text("not a robot\n", encoding="utf-8")
+    text = SEED_TASK.read_text(encoding="utf-8")
+    old = "    model: stanford\n"
+    assert text.count(old) == 1
+    task = tmp_path / "task.yaml"
+    task.write_text(text.replace(old, "    urdf: arm.urdf\n    tool_frame: tip\n"), "utf-8")
+    line = task.read_text(encoding="utf-8").splitlines().index("    urdf: arm.urdf") + 1
+    with pytest.raises(SpecError) as refused:
+        task_arm(load_task(task), tmp_path)
+    assert (refused.value.path, refused.value.line) == ("manipulator.arm.urdf", line)
+    assert "arm.urdf: cannot build the model" in refused.value.detail
+    (tmp_path / "arm.urdf").write_text(PLANAR, encoding="utf-8")
+    task.write_text(task.read_text(encoding="utf-8").replace("tool_frame: tip", "tool_frame: x"))
+    with pytest.raises(SpecError) as refused:
+        task_arm(load_task(task), tmp_path)
+    assert refused.value.path == "manipulator.arm.tool_frame"
+    assert "no frame 'x'" in refused.value.detail

@@ -245,18 +245,26 @@ def load_arm(
             return arm
         return dataclasses.replace(arm, limits=arm.limits.replace(**rates))
     assert arm_spec.urdf is not None and arm_spec.tool_frame is not None  # ArmSpec validates
-    arm = load_urdf_arm(
-        root / arm_spec.urdf,
-        arm_spec.tool_frame,
-        hand_spec,
-        package_dirs=[str(root / d) for d in arm_spec.package_dirs],
-        world_from_base=base,
-        tool_offset=offset,
-        srdf=None if arm_spec.srdf is None else root / arm_spec.srdf,
-        velocity=arm_spec.velocity_limits,
-        acceleration=arm_spec.acceleration_limits,
-        jerk=arm_spec.jerk_limits,
-        fingers=arm_spec.fingers,
-    )
+    urdf = root / arm_spec.urdf
+    try:
+        arm = load_urdf_arm(
+            urdf,
+            arm_spec.tool_frame,
+            hand_spec,
+            package_dirs=[str(root / d) for d in arm_spec.package_dirs],
+            world_from_base=base,
+            tool_offset=offset,
+            srdf=None if arm_spec.srdf is None else root / arm_spec.srdf,
+            velocity=arm_spec.velocity_limits,
+            acceleration=arm_spec.acceleration_limits,
+            jerk=arm_spec.jerk_limits,
+            fingers=arm_spec.fingers,
+        )
+    except ArmModelError as error:
+        if error.source != str(urdf):
+            raise
+        # the file's own fault is the field that names it (a task's line, not only a path)
+        field = "tool_frame" if error.message.startswith(f"{urdf}: no frame ") else "urdf"
+        raise ArmModelError(error.message, f"manipulator.arm.{field}") from None
     check_rates(arm_spec, arm.limits)
     return arm
