@@ -176,16 +176,18 @@ def test_free_order_takes_the_cheaper_order():
     spec = load_task(TWO)
     chosen = synthesize(TWO, NOMINAL)
     assert isinstance(chosen, SequenceSynthesis)
-    # 2 first steps, and each second step twice: after either seat the other hole is known
-    # wider along y than before (the box's turn over the 7.7 cm from the seat, against the
-    # 3.85 cm from its origin), so it is planned without the correction too
+    # 2 + 2 step plans: after either seat the other hole is known wider along y than before
+    # (the box's turn over the 7.7 cm from the seat, against the 3.85 cm from its origin) but
+    # narrower along x, its x-y box smaller: the second step is planned corrected only
     first, second = spec.steps
     for a, b in ((first, second), (second, first)):
         learnt = after_seat(spec.step(a), a, 0.0354)
         assert learnt is not None
-        assert correction_may_hurt(learnt.spec, seated(spec, a), b)
-    assert chosen.sequence.order == "free" and chosen.sequence.planned == 2 + 2 * 2
-    assert all(s.declined is None for s in chosen.sequence.steps)  # corrected was as fast
+        corrected, plain = _hole_bounds(learnt.spec, b), _hole_bounds(seated(spec, a), b)
+        assert corrected.dy.hi > plain.dy.hi and corrected.dx.hi < plain.dx.hi
+        assert not correction_may_hurt(learnt.spec, seated(spec, a), b)
+    assert chosen.sequence.order == "free" and chosen.sequence.planned == 2 + 2
+    assert all(s.declined is None for s in chosen.sequence.steps)
     # The other order, fixed, costs at least as much (h = 0: the search is exact).
     other = [s.pin for s in reversed([st.insertion for st in chosen.sequence.steps])]
     assert spec.insertions is not None
