@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import Literal
 
@@ -19,6 +20,8 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from synth.errors.bounds import Interval, bound_linear
+from synth.errors.chain import chain_between
+from synth.errors.estimate import ErrorReport, estimate_errors
 from synth.errors.parameters import ParameterSpace
 from synth.exceptions import SpecError
 from synth.models.arm import (
@@ -33,7 +36,7 @@ from synth.models.graph import AttributeGraph, pose_to_se3
 from synth.models.insertion import InsertionParameters, derive, refuse_unprovable
 from synth.models.manipulator import HandSpec
 from synth.models.park import nominal_environment, park_configuration
-from synth.models.spec import HoleShape, PinShape, TaskSpec
+from synth.models.spec import WORLD, HoleShape, PinShape, TaskSpec
 from synth.models.uncertainty import Uncertainty
 from synth.models.world import Fact, World
 from synth.strategies.clearance import GrossMotionCheck
@@ -131,6 +134,16 @@ class PlanContext:
     def world_hole(self) -> pin.SE3:
         """Nominal pose of the target hole in the world."""
         return self.graph.world_from(self.hole_frame)
+
+    @cached_property
+    def hole_errors(self) -> ErrorReport:
+        """The target hole's own errors in the world (``world⁻¹ ∘ hole``), no hand error.
+
+        One computation for the task: the hole-tilt refusal reads its first-order tilt, every
+        candidate's seated hand its certified box.
+        """
+        chain = chain_between(self.graph, WORLD, self.hole_frame)
+        return estimate_errors(chain, WORLD, self.hole_frame)
 
     @property
     def world_pin(self) -> pin.SE3:

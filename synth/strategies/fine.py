@@ -38,11 +38,9 @@ from collections.abc import Sequence
 import numpy as np
 import pinocchio as pin
 
-from synth.errors.chain import chain_between
-from synth.errors.estimate import estimate_errors
 from synth.models.arm import CollisionScene, SweepOptions
 from synth.models.arm.sweep import LinkDisplacement
-from synth.models.spec import WORLD, BoxShape
+from synth.models.spec import BoxShape
 from synth.strategies.approach import Candidate, hand_at
 from synth.strategies.context import Configuration, PlanContext
 from synth.strategies.records import Destination, PinInHoleStrategy
@@ -102,7 +100,8 @@ def fine_motion_obstruction(
     gross = ctx.gross
     grasp = strategy.pickup.grasp
     part = gross.part_of(ctx.graph, ctx.hole_frame)
-    options = gross.fine_options(part, ctx.arm.forward(cand.q_destination).rotation)
+    hand_seated = ctx.arm.forward(cand.q_destination).rotation
+    options = gross.fine_options(part, hand_seated)
     scene = gross.fine(grasp, part)
     hole = ctx.hole_al
     d_f = ctx.insertion.d_f
@@ -141,7 +140,6 @@ def fine_motion_obstruction(
         if reason is not None:
             return reason
     seated = _pin_world(ctx, strategy.destination)
-    hand_seated = ctx.arm.forward(cand.q_destination).rotation
     options = gross.seated_options(ctx.graph, part, hand_seated, seated_hand_displacement(ctx))
     turns = [None, *gross.seat_turns(ctx.graph, ctx.hole_frame, ctx.world_hole.translation)]
     scenes = [(t, gross.letting_go(strategy.let_go_opening, seated, part, t)) for t in turns]
@@ -181,7 +179,7 @@ def seated_hand_displacement(ctx: PlanContext) -> LinkDisplacement:
     (:meth:`~synth.strategies.clearance.GrossMotionCheck.fine_options`); a ball about the seat
     holding the arm's bodies would charge a Panda's forearm its 49 cm at the hand's 0.5°.
     """
-    bounds = estimate_errors(chain_between(ctx.graph, WORLD, ctx.hole_frame)).certified
+    bounds = ctx.hole_errors.certified
     hole = np.array([bounds.dx.magnitude, bounds.dy.magnitude, bounds.dz.magnitude])
     return LinkDisplacement(np.eye(3), hole, np.zeros(3), 0.0)
 

@@ -31,9 +31,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from synth.al.interpreter import MAX_TIME
-from synth.errors.chain import chain_between
-from synth.errors.estimate import RelationModel, estimate_errors
-from synth.models.spec import WORLD
+from synth.errors.estimate import RelationModel
 from synth.models.world import World
 from synth.strategies.approach import Candidate
 from synth.strategies.beside import false_seat_problem, support_landing_problem
@@ -113,8 +111,7 @@ def hole_tilt_problem(ctx: PlanContext) -> Rejection | None:
     is swept names the real cause (a leaning part's margins would otherwise block every
     transport first).
     """
-    chain = chain_between(ctx.graph, WORLD, ctx.hole_frame)
-    tilt = estimate_errors(chain, WORLD, ctx.hole_frame).first_order.tilt
+    tilt = ctx.hole_errors.first_order.tilt
     if tilt <= ctx.insertion.dtheta_ok:
         return None
     return Rejection(
