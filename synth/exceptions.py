@@ -102,11 +102,14 @@ class ArmModelError(SynthError):
 
     Raised for an unreadable URDF or parameter file, an unknown tool frame, joint types the arm
     layer does not handle, a joint-limit override of the wrong length, or clashing geometry
-    names. ``source`` names the file or spec field at fault (empty when not applicable).
+    names. ``source`` names the file or spec field at fault (empty when not applicable);
+    ``field``, for a fault of an arm file, the ``manipulator.arm`` field it belongs to
+    (``tool_frame``, ``fingers``; empty: the file's own).
     """
 
-    def __init__(self, message: str, source: str = "") -> None:
+    def __init__(self, message: str, source: str = "", *, field: str = "") -> None:
         self.source = source
+        self.field = field
         super().__init__(f"{source}: {message}" if source else message)
 
 

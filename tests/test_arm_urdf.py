@@ -4,6 +4,7 @@ optional ``example-robot-data`` package checked against Universal Robots' publis
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +22,7 @@ from synth.models.arm import (
     solve_ik,
     task_arm,
 )
+from synth.models.arm.native_stderr import captured_stderr, native_detail
 from synth.models.catalog import ROBOTS_EXTRA
 from synth.models.loader import load_task
 from synth.models.manipulator import ArmSpec, HandSpec
@@ -100,6 +102,44 @@ def test_unknown_tool_frame_and_missing_file_are_reported(planar: Path, tmp_path
         load_urdf_arm(planar, "flange", HandSpec())
     with pytest.raises(ArmModelError, match="not found"):
         load_urdf_arm(tmp_path / "nope.urdf", "tip", HandSpec())
+
+
+def test_urdfdoms_own_report_is_in_the_message_not_on_stderr(
+    tmp_path: Path, capfd: pytest.CaptureFixture[str]
+) -> None:
+    # urdfdom wrote "Error:   Error=XML_ERROR_PARSING_TEXT … at line 103 in
+    # /project/urdfdom/…/model.cpp" to descriptor 2 above synth's one-line message; the useful
+    # part (what is wrong, and where in the user's file) now is in the message, and the C++
+    # source position is dropped
+    broken = tmp_path / "broken.urdf"
+    broken.write_text("<robot name='x'>\n<link name='a'>\n</robot>\n", encoding="utf-8")
+    with pytest.raises(ArmModelError) as refused:
+        load_urdf_arm(broken, "a", HandSpec())
+    assert "(urdfdom: Error=XML_ERROR_" in refused.value.message
+    assert "model.cpp" not in refused.value.message
+    limitless = tmp_path / "limitless.urdf"
+    limitless.write_text(
+        PLANAR.replace('<limit lower="-3" upper="3" velocity="2" effort="10"/>', "", 1),
+        encoding="utf-8",
+    )
+    with pytest.raises(ArmModelError, match="does not specify limits"):
+        load_urdf_arm(limitless, "tip", HandSpec())
+    assert capfd.readouterr().err == ""
+
+
+def test_captured_native_stderr_is_passed_on_when_the_call_succeeds(
+    capfd: pytest.CaptureFixture[str],
+) -> None:
+    # nothing written to descriptor 2 during a capture is lost: a clean exit writes it back
+    with captured_stderr() as native:
+        os.write(2, b"Warning: a native note\n")
+    assert native.text == "Warning: a native note\n"
+    assert capfd.readouterr().err == "Warning: a native note\n"
+    with pytest.raises(RuntimeError), captured_stderr() as native:
+        os.write(2, b"Error:   Error=BAD\n         at line 3 in /src/x.cpp\n")
+        raise RuntimeError
+    assert capfd.readouterr().err == ""
+    assert native_detail(native.text) == "Error=BAD"
 
 
 def test_continuous_joint_is_rejected(tmp_path: Path):
@@ -282,3 +322,14 @@ def test_a_task_whose_urdf_is_not_one_names_its_field_and_line(tmp_path: Path) -
         task_arm(load_task(task), tmp_path)
     assert refused.value.path == "manipulator.arm.tool_frame"
     assert "no frame 'x'" in refused.value.detail
+    # a finger joint the file lacks is the fingers' fault (the error says which field, the
+    # loader no longer reads it from the message's words)
+    task.write_text(
+        task.read_text(encoding="utf-8").replace(
+            "tool_frame: x", "tool_frame: tip\n    fingers: [left, right]"
+        )
+    )
+    with pytest.raises(SpecError) as refused:
+        task_arm(load_task(task), tmp_path)
+    assert refused.value.path == "manipulator.arm.fingers"
+    assert "no finger joint 'left'" in refused.value.detail

@@ -264,7 +264,7 @@ def load_arm(
         if error.source != str(urdf):
             raise
         # the file's own fault is the field that names it (a task's line, not only a path)
-        field = "tool_frame" if error.message.startswith(f"{urdf}: no frame ") else "urdf"
+        field = error.field or "urdf"
         raise ArmModelError(error.message, f"manipulator.arm.{field}") from None
     check_rates(arm_spec, arm.limits)
     return arm

@@ -121,7 +121,11 @@ def urdf_hand(
     joint_from_hand = frame.placement
     hand_from_joint = joint_from_hand.inverse()
     if len(fingers) != 2:
-        raise ArmModelError(f"{len(fingers)} finger joints; a two-finger gripper has 2", source)
+        raise ArmModelError(
+            f"{len(fingers)} finger joints; a two-finger gripper has 2",
+            source,
+            field="fingers",
+        )
     sides: dict[str, tuple[trimesh.Trimesh, trimesh.Trimesh, FingerJoint]] = {}
     used: set[str] = set()
     for finger in fingers:
@@ -131,21 +135,28 @@ def urdf_hand(
                 f"finger joint {finger.name!r} slides along {np.round(axis, 3).tolist()} in the "
                 "hand frame, not along x: turn the hand frame (tool_offset) about z",
                 source,
+                field="tool_offset",
             )
         objects = [
             o for o in geometry.geometryObjects if model.frames[o.parentFrame].name == finger.link
         ]
         if not objects:
-            raise ArmModelError(f"finger link {finger.link!r} has no collision shapes", source)
+            raise ArmModelError(
+                f"finger link {finger.link!r} has no collision shapes", source, field="fingers"
+            )
         used |= {o.name for o in objects}
         shapes = [_in_hand(o, hand_from_joint) for o in objects]
         inner = [float(np.min(np.abs(s.vertices[:, 0]))) for s in shapes]
         pad = shapes[int(np.argmin(inner))]
         name = FINGERS[0] if float(np.mean(pad.vertices[:, 0])) < 0 else FINGERS[1]
         if name in sides:
-            raise ArmModelError("both fingers lie on the same side of the hand's x = 0", source)
+            raise ArmModelError(
+                "both fingers lie on the same side of the hand's x = 0", source, field="fingers"
+            )
         if float(axis[0]) * (1 if name == FINGERS[1] else -1) < 0:
-            raise ArmModelError(f"finger joint {finger.name!r} closes as it rises", source)
+            raise ArmModelError(
+                f"finger joint {finger.name!r} closes as it rises", source, field="fingers"
+            )
         sides[name] = (_joined(shapes), pad, finger)
     _, left_pad, left_joint = sides[FINGERS[0]]
     _, right_pad, right_joint = sides[FINGERS[1]]
@@ -160,18 +171,25 @@ def urdf_hand(
             f"centre (pad centre in the hand frame: {np.round(1000 * centre, 2).tolist()} mm); "
             "set tool_offset to the point between the pads",
             source,
+            field="tool_offset",
         )
     palm_objects = [
         o for o in geometry.geometryObjects if model.frames[o.parentFrame].name == tool_link
     ]
     if not palm_objects:
-        raise ArmModelError(f"the tool link {tool_link!r} has no collision shapes (palm)", source)
+        raise ArmModelError(
+            f"the tool link {tool_link!r} has no collision shapes (palm)",
+            source,
+            field="tool_frame",
+        )
     used |= {o.name for o in palm_objects}
     palm = _joined([_in_hand(o, hand_from_joint) for o in palm_objects])
     palm_lo, palm_hi = palm.bounds
     finger_length = -float(palm_hi[2])
     if finger_length <= 0:
-        raise ArmModelError("the palm reaches past the hand origin between the pads", source)
+        raise ArmModelError(
+            "the palm reaches past the hand origin between the pads", source, field="tool_offset"
+        )
     extent = hi - lo
     hand = HandSpec.model_validate(
         {

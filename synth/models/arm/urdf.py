@@ -23,6 +23,7 @@ from synth.models.arm.bodies import Body
 from synth.models.arm.fingers import FingerJoint, urdf_hand
 from synth.models.arm.hand import hand_bodies
 from synth.models.arm.limits import JointKind, JointLimits
+from synth.models.arm.native_stderr import captured_stderr, native_detail
 from synth.models.manipulator import HandSpec
 
 DEFAULT_ACCELERATION_TIME: float = 0.25
@@ -151,15 +152,20 @@ def load_urdf_arm(
     if not path.is_file():
         raise ArmModelError("URDF file not found", source)
     try:
-        model = pin.buildModelFromUrdf(str(path))
-        geometry = pin.buildGeomFromUrdf(
-            model, str(path), pin.GeometryType.COLLISION, package_dirs=list(package_dirs)
-        )
+        with captured_stderr() as native:
+            model = pin.buildModelFromUrdf(str(path))
+            geometry = pin.buildGeomFromUrdf(
+                model, str(path), pin.GeometryType.COLLISION, package_dirs=list(package_dirs)
+            )
     except (RuntimeError, ValueError) as exc:
-        raise ArmModelError(f"cannot build the model: {exc}", source) from None
+        detail = native_detail(native.text)
+        said = f" (urdfdom: {detail})" if detail else ""
+        raise ArmModelError(f"cannot build the model: {exc}{said}", source) from None
     if not model.existFrame(tool_frame):
         known = ", ".join(f.name for f in model.frames if f.type == pin.FrameType.BODY)
-        raise ArmModelError(f"no frame {tool_frame!r}; body frames: {known}", source)
+        raise ArmModelError(
+            f"no frame {tool_frame!r}; body frames: {known}", source, field="tool_frame"
+        )
     offset = pin.SE3.Identity() if tool_offset is None else tool_offset
     finger_joints = _finger_joints(model, tool_frame, offset, fingers, source)
     if finger_joints:
@@ -260,17 +266,17 @@ def _finger_joints(
 
     for name in names:
         if not model.existJointName(name):
-            raise ArmModelError(f"no finger joint {name!r}", source)
+            raise ArmModelError(f"no finger joint {name!r}", source, field="fingers")
         j = model.getJointId(name)
         if model.joints[j].shortname() not in _PRISMATIC:
-            raise ArmModelError(f"finger joint {name!r} is not prismatic", source)
+            raise ArmModelError(f"finger joint {name!r} is not prismatic", source, field="fingers")
         links = [
             k
             for k, f in enumerate(model.frames)
             if f.parentJoint == j and f.type == pin.FrameType.BODY
         ]
         if not links:
-            raise ArmModelError(f"finger joint {name!r} carries no link", source)
+            raise ArmModelError(f"finger joint {name!r} carries no link", source, field="fingers")
         step = 1e-3
         q1 = q0.copy()
         q1[model.idx_qs[j]] += step
