@@ -17,9 +17,14 @@ from _paths import SEED_TAP_TASK, SEED_TASK, TASKS
 from _tasks import plannable
 
 from synth.cli import main
+from synth.errors.chain import chain_between
+from synth.errors.estimate import estimate_errors
 from synth.exceptions import NoStrategyError
+from synth.models.believed import believed_graph
 from synth.models.loader import load_task, parse_task
+from synth.models.spec import WORLD
 from synth.strategies import PlanOptions, plan_task
+from synth.strategies.context import plan_context
 from synth.units import CM, INCH
 
 
@@ -164,6 +169,35 @@ def _variant(tmp_path: Path, old: str, new: str) -> Path:
     path = tmp_path / "variant.yaml"
     path.write_text(text.replace(old, new))
     return path
+
+
+@pytest.mark.parametrize("rx_deg", [1.46, 3.0])
+def test_a_hole_that_leans_past_the_tilt_limit_is_refused_before_any_candidate(
+    tmp_path: Path, rx_deg: float
+) -> None:
+    # The box may turn ±rx about x, so BH1's axis may lean rx off the vertical (a part's
+    # rotation, which no grasp, tap or search corrects): past Δθ_ok (the task's 10° clipped to
+    # the wedging limit, 1.492° for this pin and hole) every candidate fails seed §4.5.1
+    # (L2290). The refusal compares, and quotes, the certified tilt of world → BH1, the figure
+    # `synth errors` prints. At 1.46° the first-order tilt passes and the certified one
+    # (asin(sin 1.46° / cos 15°) and its remainder, ≈ 1.51°: the six tilt directions are 30°
+    # apart) does not; candidates compare the certified figure of a larger chain, so all of
+    # them would fail too, but each only after its motions were swept.
+    path = _variant(tmp_path, "      rz: 5 deg\n", f"      rz: 5 deg\n      rx: {rx_deg} deg\n")
+    spec = load_task(path)
+    hole = next(f.name for f in spec.frames if f.al_name == "BH1")
+    errors = estimate_errors(chain_between(believed_graph(spec), WORLD, hole), WORLD, hole)
+    limit = plan_context(spec).insertion.dtheta_ok
+    assert math.degrees(limit) == pytest.approx(1.492, abs=5e-4)
+    assert errors.certified.tilt > limit
+    assert errors.first_order.tilt == pytest.approx(math.radians(rx_deg), rel=1e-9)
+    if rx_deg < 1.492:
+        assert errors.first_order.tilt < limit
+    with pytest.raises(NoStrategyError) as info:
+        plan_task(spec)
+    ((name, reason),) = info.value.reasons
+    assert name == "task" and info.value.root.cause == "tilt"
+    assert f"may tilt {math.degrees(errors.certified.tilt):.3f}°" in reason, reason
 
 
 def test_no_strategy_when_the_tilt_is_never_good_enough(tmp_path, capsys) -> None:

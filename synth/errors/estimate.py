@@ -156,6 +156,17 @@ class RelationModel:
         return np.array(first), np.array(cert)
 
 
+def certified_tilt(table: np.ndarray) -> float:
+    """Certified tilt [rad] from the certified Δθ_i of equally spaced directions.
+
+    ``asin(max_i Δθ_i / cos(π / 2n))``: n directions π/n apart (six, 30°), so the support of
+    the tilt vector in any direction is at most ``max_i h_i / cos 15°`` (a 12-gon
+    circumscribes the support set; module docstring).
+    """
+    half_spacing = math.pi / (2 * len(table))
+    return math.asin(min(1.0, float(np.max(table)) / math.cos(half_spacing)))
+
+
 def _bounds(p: list[Interval], t: list[Interval], tilt: float) -> ErrorBounds:
     return ErrorBounds(
         dx=p[0], dy=p[1], dz=p[2], dtheta_x=t[0], dtheta_y=t[1], dtheta_z=t[2], tilt=tilt
@@ -212,10 +223,8 @@ def estimate_errors(chain: ErrorChain, start: str = "from", end: str = "to") -> 
     cert_t = [Interval(min(c.lo, g * c.lo), max(c.hi, g * c.hi)) for c in cert_s]
 
     tilt_first, tilt_cert = rel.tilt_table()
-    half_spacing = math.pi / (2 * TILT_DIRECTIONS)
-    tilt_certified = math.asin(min(1.0, float(tilt_cert.max()) / math.cos(half_spacing)))
     first = _bounds(first_p, first_t, float(tilt_first.max()))
-    certified = _bounds(cert_p, cert_t, tilt_certified)
+    certified = _bounds(cert_p, cert_t, certified_tilt(tilt_cert))
     return ErrorReport(
         start,
         end,

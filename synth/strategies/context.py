@@ -139,7 +139,7 @@ class PlanContext:
     def hole_errors(self) -> ErrorReport:
         """The target hole's own errors in the world (``world⁻¹ ∘ hole``), no hand error.
 
-        One computation for the task: the hole-tilt refusal reads its first-order tilt, every
+        One computation for the task: the hole-tilt refusal reads its certified tilt, every
         candidate's seated hand its certified box.
         """
         chain = chain_between(self.graph, WORLD, self.hole_frame)

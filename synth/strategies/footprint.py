@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from synth.errors.chain import ErrorChain
-from synth.errors.estimate import TILT_DIRECTIONS, RelationModel
+from synth.errors.estimate import TILT_DIRECTIONS, RelationModel, certified_tilt
 from synth.strategies.context import PlanContext
 from synth.strategies.records import ErrorFootprint
 
@@ -40,16 +40,6 @@ def footprint_box(xi: NDArray[np.float64]) -> tuple[float, float, float]:
     k = int(np.argmax(xi))
     half = len(xi) // 2
     return float(xi[k]), float(xi[(k + half) % len(xi)]), float(DIRECTIONS[k])
-
-
-def certified_tilt(table: NDArray[np.float64]) -> float:
-    """Certified tilt [rad] from the six certified Δθ_i: ``asin(max_i Δθ_i / cos 15°)``.
-
-    The six directions are 30° apart, so the support of the tilt vector in any direction is at
-    most ``max_i h_i / cos 15°`` (a 12-gon circumscribes the support set).
-    """
-    half_spacing = math.pi / (2 * len(table))
-    return math.asin(min(1.0, float(np.max(table)) / math.cos(half_spacing)))
 
 
 def footprint_tables(

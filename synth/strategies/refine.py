@@ -104,14 +104,15 @@ def axial_limit(tau: float, d_f: float, d_s: float, floor: float = 0.0) -> float
 def hole_tilt_problem(ctx: PlanContext) -> Rejection | None:
     """Refuse a task whose hole alone may tilt more than Δθ_ok (seed §4.5.1, L2290).
 
-    The pin's tilt at the hole composes the hand's tilt with the hole's own, so its worst
-    case is at least the hole axis' worst tilt in the world (the first-order bound of
-    ``world⁻¹ ∘ hole``, with every hand error at zero). No grasp, tap or search reduces a
-    part's rotation error, so every candidate would fail §4.5.1; saying so before any motion
-    is swept names the real cause (a leaning part's margins would otherwise block every
-    transport first).
+    The pin's tilt at the hole composes the hand's tilt with the hole's own, and a
+    candidate's §4.5.1 test compares the certified bound of that composition, which is at
+    least the certified tilt of ``world⁻¹ ∘ hole`` (the same relation with every hand error
+    at zero, a point of the candidate's larger error box). No grasp, tap or search reduces a
+    part's rotation error, so when that tilt exceeds Δθ_ok every candidate would fail; saying
+    so before any motion is swept names the real cause (a leaning part's margins would
+    otherwise block every transport first), and quotes the figure ``synth errors`` prints.
     """
-    tilt = ctx.hole_errors.first_order.tilt
+    tilt = ctx.hole_errors.certified.tilt
     if tilt <= ctx.insertion.dtheta_ok:
         return None
     return Rejection(

@@ -38,13 +38,12 @@ import numpy as np
 import shapely
 
 from synth.errors.bounds import ErrorLP, Interval, build_error_lp, solve_error_lp
-from synth.errors.estimate import RelationModel
+from synth.errors.estimate import RelationModel, certified_tilt
 from synth.errors.parameters import ParameterSpace
 from synth.models.graph import AttributeGraph
 from synth.models.spec import HoleShape, SurfaceShape
 from synth.strategies.approach import Candidate, hand_at, hole_frame_offset, pin_destination
 from synth.strategies.context import PlanContext
-from synth.strategies.footprint import certified_tilt
 from synth.strategies.hypotheses import TapAt
 from synth.strategies.records import ErrorFootprint, Rejection, Tap
 from synth.strategies.relations import TapRelations, hole_only_relation, tap_relations
