@@ -29,7 +29,7 @@ from _paths import SEED_PROGRAM, SEED_TASK
 from synth.al.interpreter import Interpreter
 from synth.al.machine import DurationConstraint, IdealMachine, MachineCommand
 from synth.al.parser import parse_program
-from synth.al.timeline import segment_times
+from synth.al.timeline import duration_conflict, segment_times
 from synth.replay import machine_for, replay_context, replay_program
 from synth.replay.truth import HandErrors, nominal_world
 
@@ -134,3 +134,39 @@ def test_a_duration_that_is_not_positive_is_a_runtime_error(seconds: str) -> Non
     report = replay_program(f"{_UP} WITH DURATION = {seconds}*SEC;\n", SEED_TASK).nominal
     assert report.outcome == "error" and report.line == 1
     assert f"DURATION = {seconds} s: a motion takes a positive time" in report.message
+
+
+def test_two_durations_no_time_meets_are_a_runtime_error_at_the_later() -> None:
+    # `= 2` then `= 3` ran 3 s (each constraint applied in turn, the last one's time kept):
+    # the program asked for two times at once. Bounds from below and above that leave an
+    # interval are kept, and give the interval's clamp (the motion alone takes `fastest`).
+    fastest = replay_program(f"{_UP};\n", SEED_TASK).nominal.time
+    for clauses, earlier in [
+        ("DURATION = 2*SEC,\n DURATION = 3*SEC", "DURATION = 2 s (line 1)"),
+        ("DURATION >= 4*SEC,\n DURATION <= 3*SEC", "DURATION ≥ 4 s (line 1)"),
+        ("DURATION <= 3*SEC WITH DURATION > 1*SEC,\n DURATION = 5*SEC", "DURATION ≤ 3 s"),
+    ]:
+        report = replay_program(f"{_UP} WITH {clauses};\n", SEED_TASK).nominal
+        assert report.outcome == "error" and report.line == 2, report.message
+        assert f"contradicts {earlier}" in report.message, report.message
+    low, high = 3 * fastest, 4 * fastest
+    for clauses, time in [
+        (f"DURATION >= {low:.6f}*SEC, DURATION <= {high:.6f}*SEC", low),
+        (f"DURATION <= {high:.6f}*SEC, DURATION >= {low:.6f}*SEC", low),
+        (f"DURATION = {high:.6f}*SEC, DURATION >= {low:.6f}*SEC", high),
+    ]:
+        report = replay_program(f"{_UP} WITH {clauses};\n", SEED_TASK).nominal
+        assert report.outcome == "failure" and report.violations == (), report.message
+        assert report.time == pytest.approx(time, abs=1e-6)
+
+
+def test_durations_of_different_segments_do_not_conflict() -> None:
+    # a via segment's own DURATION and the whole motion's are different scopes
+    c = [
+        DurationConstraint("=", 2.0, segment=0, line=1),
+        DurationConstraint("=", 3.0, segment=None, line=1),
+        DurationConstraint("≥", 1.0, segment=0, line=1),
+    ]
+    assert duration_conflict(c) is None
+    late = DurationConstraint("<", 1.5, segment=0, line=2)
+    assert duration_conflict([*c, late]) == (c[0], late)

@@ -138,6 +138,7 @@ from synth.al.machine import (
     TorqueMonitor,
 )
 from synth.al.names import ARM_NAMES, KEYWORDS
+from synth.al.timeline import duration_conflict
 from synth.al.values import (
     FORCE,
     LENGTH,
@@ -781,6 +782,7 @@ class Interpreter:
         self, s: ast.Move | ast.Open | ast.Close | ast.Center, cx: _Context
     ) -> list[MotionConstraint]:
         out: list[MotionConstraint] = []
+        written: list[ast.Expr] = []
         targets = 0
         previous: ast.Clause | None = None
         for clause in s.clauses:
@@ -789,7 +791,17 @@ class Interpreter:
             elif isinstance(clause, ast.WithClause):
                 segment = targets - 1 if isinstance(previous, ast.ViaClause) else None
                 out += [self._constraint(c, cx, segment) for c in clause.conditions]
+                written += clause.conditions
             previous = clause
+        conflict = duration_conflict(out)
+        if conflict is not None:
+            bound, later = conflict
+            raise self._error(
+                next(w for w, c in zip(written, out, strict=True) if c is later),
+                f"DURATION {later.relation} {later.seconds:g} s contradicts DURATION "
+                f"{bound.relation} {bound.seconds:g} s (line {bound.line}) for the same motion: "
+                "no time meets both",
+            )
         return out
 
     def _constraint(self, c: ast.Expr, cx: _Context, segment: int | None) -> MotionConstraint:

@@ -70,6 +70,7 @@ __all__ = [
     "apply_duration",
     "crossing_level",
     "duration_checkpoints",
+    "duration_conflict",
     "monitor_holds",
     "opening_checkpoints",
     "ramp_levels",
@@ -89,6 +90,38 @@ def apply_duration(time: float, constraint: DurationConstraint) -> float:
     if constraint.relation == "=":
         return constraint.seconds
     return time
+
+
+def duration_conflict(
+    constraints: Sequence[MotionConstraint],
+) -> tuple[DurationConstraint, DurationConstraint] | None:
+    """Two ``WITH DURATION`` constraints of one segment (or of the whole motion) no time meets.
+
+    Each constraint bounds the time from below (``>``, ``≥``, ``=``) or above (``<``, ``≤``,
+    ``=``), as :func:`apply_duration` applies it; the bounds of one scope conflict when the
+    greatest lower one exceeds the least upper one. Returns the binding earlier constraint and
+    the later one that contradicts it, or None. Applied in turn they would silently leave the
+    last one's time (``= 2`` then ``= 3`` takes 3 s).
+    """
+    lower: dict[int | None, DurationConstraint] = {}
+    upper: dict[int | None, DurationConstraint] = {}
+    for c in constraints:
+        if not isinstance(c, DurationConstraint) or c.relation in ("≠",):
+            continue
+        scope = c.segment
+        if c.relation in (">", "≥", "="):
+            bound = upper.get(scope)
+            if bound is not None and c.seconds > bound.seconds:
+                return bound, c
+            if scope not in lower or c.seconds > lower[scope].seconds:
+                lower[scope] = c
+        if c.relation in ("<", "≤", "="):
+            bound = lower.get(scope)
+            if bound is not None and c.seconds < bound.seconds:
+                return bound, c
+            if scope not in upper or c.seconds < upper[scope].seconds:
+                upper[scope] = c
+    return None
 
 
 def segment_times(
