@@ -312,7 +312,21 @@ def _seed_with(old: str, new: str) -> tuple[str, int]:
             "[[-4.45 cm, -3.80 cm], [4.45 cm, -3.80 cm]",
             "[[-4.65 cm, -3.80 cm], [4.45 cm, -3.80 cm]",
             "frames[1].shape.outline[0]",
-            "outside the top face of box 'box' (8.9 × 7.6 cm)",
+            "outside face top of box 'box' (8.9 × 7.6 × 4.9 cm)",
+        ),
+        # a top declared 0.3 cm low lies inside the solid box the replay collides with: the
+        # taps and the search were planned on a plane 0.3 cm under the real face
+        (
+            "pose: {translation: [0 cm, 0 cm, 4.90 cm]}",
+            "pose: {translation: [0 cm, 0 cm, 4.60 cm]}",
+            "frames[1].pose",
+            "it is 0.3 cm inside the box's top face",
+        ),
+        (
+            "pose: {translation: [0 cm, 0 cm, 4.90 cm]}",
+            "pose: {translation: [0 cm, 0 cm, 4.90 cm], rotation: [{x: 2 deg}]}",
+            "frames[1].pose",
+            "it is turned 2° from the box's top face",
         ),
     ],
 )
@@ -329,3 +343,49 @@ def test_an_insertion_or_face_the_parts_contradict_is_refused_at_its_field(
         line = text[: text.index("  start_hole:")].count("\n") + 1
     if "\n" not in old:
         assert refused.value.line == line
+
+
+@pytest.mark.parametrize(
+    ("pose", "outline", "refusal"),
+    [
+        # 0.05 mm above the top (a size written in inches, a face in centimetres): on it
+        (
+            "{translation: [0 cm, 0 cm, 4.905 cm]}",
+            "[[-4 cm, -3 cm], [4 cm, -3 cm], [4 cm, 3 cm]]",
+            None,
+        ),
+        # the +x side face (x = 4.45 cm, 7.6 × 4.9 cm): the surface's z turned onto +x
+        (
+            "{translation: [4.45 cm, 0 cm, 2.45 cm], rotation: [{y: 90 deg}]}",
+            "[[-2.4 cm, -3.7 cm], [2.4 cm, -3.7 cm], [2.4 cm, 3.7 cm]]",
+            None,
+        ),
+        # on that side face, but 5 cm tall where the face is 4.9 cm: vertex 1 is 0.05 cm
+        # below the box's bottom (the surface's x runs down the face)
+        (
+            "{translation: [4.45 cm, 0 cm, 2.45 cm], rotation: [{y: 90 deg}]}",
+            "[[2.5 cm, -3.7 cm], [-2.4 cm, -3.7 cm], [-2.4 cm, 3.7 cm]]",
+            "outline vertex 1 of 'side' lies outside face xpos",
+        ),
+        # beside the box, 1 cm out from its −y side
+        (
+            "{translation: [0 cm, -4.80 cm, 2.45 cm], rotation: [{x: 90 deg}]}",
+            "[[-1 cm, -1 cm], [1 cm, -1 cm], [1 cm, 1 cm]]",
+            "it is 1 cm outside the box's yneg face",
+        ),
+    ],
+)
+def test_a_surface_lies_on_a_face_of_its_box(pose: str, outline: str, refusal: str | None) -> None:
+    old = "  - name: bh1\n"
+    side = (
+        f"  - name: side\n    al_name: SIDE\n    parent: box\n    pose: {pose}\n"
+        f"    shape: {{type: surface, outline: {outline}}}\n"
+    )
+    text, _ = _seed_with(old, side + old)
+    if refusal is None:
+        parse_task(text)
+        return
+    with pytest.raises(SpecError) as refused:
+        parse_task(text)
+    assert refused.value.path.startswith("frames[2].")
+    assert refusal in refused.value.detail, refused.value.detail

@@ -8,6 +8,7 @@ references, infeasible constraint sets).
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any
 
@@ -16,7 +17,7 @@ from pydantic import ValidationError
 from scipy.optimize import linprog
 
 from synth.exceptions import FrameLookupError, SpecError
-from synth.models.features import check_contacts
+from synth.models.features import BOX_FACES, Face, box_features, check_contacts
 from synth.models.graph import AttributeGraph
 from synth.models.jamming import fit_problem
 from synth.models.meshes import hole_problem
@@ -266,10 +267,13 @@ def _check_start_hole(spec: TaskSpec, ins: InsertionSpec, fail: Any, where: Path
 
 
 def _check_outlines_fit(spec: TaskSpec, fail: Any) -> None:
-    """Fail if a surface outline on a box's top face reaches beyond that face.
+    """Fail if a surface of a box part is not on one of its faces, or reaches beyond it.
 
-    The tapping place is chosen inside the outline; an outline wider than the box put it in the
-    air. Surfaces elsewhere (a side face, a free-standing plate) are not checked.
+    A surface is a face of its part: the pin taps it and the hole is drilled into it, and the
+    replay's solid is the box. One off the box's faces (0.3 cm inside it, or tilted on it) was
+    planned on a plane that is not there; an outline wider than the face put the tapping place
+    in the air. Within :data:`_FACE_DISTANCE` and :data:`_FACE_ANGLE` a surface is on a face (a
+    task in inches meets one in centimetres); surfaces of other shapes are not checked.
     """
     graph = AttributeGraph(spec)
     for i, f in enumerate(spec.frames):
@@ -281,19 +285,32 @@ def _check_outlines_fit(spec: TaskSpec, fail: Any) -> None:
         if box is None or box.type != "box":
             continue
         local = graph.relative(owner, f.name)
-        if (
-            local.rotation[2, 2] < 1.0 - _ON_FACE
-            or abs(local.translation[2] - box.size[2]) > _ON_FACE
-        ):
+        normal, origin = local.rotation[:, 2], local.translation
+        features = box_features(box.size)
+        face = max((features[n] for n in BOX_FACES), key=lambda g: float(g.normal @ normal))
+        assert isinstance(face, Face)
+        turned = math.acos(min(1.0, float(face.normal @ normal)))
+        off = float(face.normal @ (origin - face.point))
+        if turned > _FACE_ANGLE or abs(off) > _FACE_DISTANCE:
+            side = "outside" if off > 0 else "inside"
+            how = [f"{100 * abs(off):.4g} cm {side}"] if abs(off) > _FACE_DISTANCE else []
+            how += [f"turned {math.degrees(turned):.3g}° from"] if turned > _FACE_ANGLE else []
+            fail(
+                ("frames", i, "pose"),
+                f"surface {f.name!r} is not on a face of box {owner!r}: it is "
+                f"{' and '.join(how)} the box's {face.name} face; a surface is a face of its "
+                "part, where the pin taps and the hole is drilled",
+            )
             continue
-        half = np.array(box.size[:2]) / 2 + _ON_FACE
+        edges = face.inward_edge_normals()
         for k, (x, y) in enumerate(shape.outline):
-            corner = local.act(np.array([x, y, 0.0]))[:2]
-            if np.any(np.abs(corner) > half):
+            corner = local.act(np.array([x, y, 0.0]))
+            if any(float((corner - q) @ m) < -_FACE_DISTANCE for m, q in edges):
+                size = " × ".join(f"{100 * v:.4g}" for v in box.size)
                 fail(
                     ("frames", i, "shape", "outline", k),
-                    f"outline vertex {k + 1} of {f.name!r} lies outside the top face of box "
-                    f"{owner!r} ({100 * box.size[0]:.4g} × {100 * box.size[1]:.4g} cm)",
+                    f"outline vertex {k + 1} of {f.name!r} lies outside face {face.name} of box "
+                    f"{owner!r} ({size} cm)",
                 )
 
 
@@ -342,6 +359,13 @@ def _check_holes_fit(spec: TaskSpec, fail: Any) -> None:
 _ON_FACE = 1e-6
 """[m], [rad]: how exactly a hole must sit on its box's top face to be checked against it (the
 workcell's placement tolerance)."""
+
+_FACE_DISTANCE = 1e-4
+"""[m] How far from its box's face a surface may be declared: 0.1 mm, far below any position
+tolerance a task gives, and above the rounding of sizes written in another unit."""
+
+_FACE_ANGLE = 1e-3
+"""[rad] How far a surface's normal may turn from its face's (0.057°)."""
 
 
 def _insertion_locations(spec: TaskSpec) -> list[tuple[PathKey, InsertionSpec]]:
