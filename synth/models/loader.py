@@ -17,7 +17,7 @@ from pydantic import ValidationError
 from scipy.optimize import linprog
 
 from synth.exceptions import FrameLookupError, SpecError
-from synth.models.features import BOX_FACES, Face, box_features, check_contacts
+from synth.models.features import Face, box_features, check_contacts
 from synth.models.graph import AttributeGraph
 from synth.models.jamming import fit_problem
 from synth.models.meshes import hole_problem
@@ -286,9 +286,8 @@ def _check_outlines_fit(spec: TaskSpec, fail: Any) -> None:
             continue
         local = graph.relative(owner, f.name)
         normal, origin = local.rotation[:, 2], local.translation
-        features = box_features(box.size)
-        face = max((features[n] for n in BOX_FACES), key=lambda g: float(g.normal @ normal))
-        assert isinstance(face, Face)
+        faces = [g for g in box_features(box.size).values() if isinstance(g, Face)]
+        face = max(faces, key=lambda g: float(g.normal @ normal))
         turned = math.acos(min(1.0, float(face.normal @ normal)))
         off = float(face.normal @ (origin - face.point))
         if turned > _FACE_ANGLE or abs(off) > _FACE_DISTANCE:
