@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 from pathlib import Path
+from typing import Any
 
 from _paths import TASKS
 
@@ -55,3 +56,14 @@ def _synthesize(task: Path | TaskSpec, trials: int, seed: int) -> Synthesis:
 
 
 _synthesized_file = functools.cache(_synthesize)
+
+
+def without_lifts(monkeypatch: Any) -> None:
+    """Plan as before gross motions could be lifted over the workcell (synth/strategies/detour.py).
+
+    For tests of what the planner does when a straight move is obstructed and nothing else
+    helps: a refusal, or a sequence that goes back to another plan.
+    """
+    refuse = lambda *args, **kwargs: "lifts are off in this test"  # noqa: E731
+    monkeypatch.setattr("synth.strategies.grasp.lift_over", refuse)
+    monkeypatch.setattr("synth.strategies.approach.lift_over", refuse)

@@ -14,15 +14,18 @@ reported on the planner's program before the sweep existed (AL line 10, hand at 
 
 from __future__ import annotations
 
+import itertools
 import math
 from pathlib import Path
 
 import numpy as np
+import pinocchio as pin
 import pytest
 from _paths import SEED_TASK, TASKS
-from _tasks import plannable, synthesized, with_base
+from _tasks import plannable, synthesized, with_base, without_lifts
 
 from synth.codegen.emitter import emit_program
+from synth.models.arm import Obstacle
 from synth.models.believed import believed_graph
 from synth.models.loader import load_task
 from synth.models.spec import TaskSpec
@@ -46,7 +49,11 @@ def old_base() -> TaskSpec:
     return with_base(load_task(SEED_TASK), 20, 80, 225)
 
 
-def test_the_sweep_rejects_the_pickup_whose_move_from_park_hits_the_box(old_base) -> None:
+def test_the_sweep_finds_the_pickup_whose_move_from_park_hits_the_box(
+    old_base, monkeypatch
+) -> None:
+    # Straight moves only (as before lifts): the sweep refuses the pickup
+    without_lifts(monkeypatch)
     ctx = plan_context(old_base)
     pickups, rejected = generate_pickups(ctx)
     reasons = [r.reason for r in rejected if r.candidate == OBSTRUCTED]
@@ -68,6 +75,48 @@ def test_the_sweep_rejects_the_pickup_whose_move_from_park_hits_the_box(old_base
     path = [ctx.q_park + s * (q_app - ctx.q_park) for s in np.linspace(0, 1, int(8e3 * travel))]
     hits = {pair for q in path for pair in scene.collisions(q)}
     assert ("finger_left", "BOX") in hits
+
+
+def test_the_pickup_whose_move_from_park_hits_the_box_is_lifted_over_it(old_base) -> None:
+    # With lifts the same pickup is kept: the hand rises over BOX and comes down above the pin
+    ctx = plan_context(old_base)
+    pickups, _ = generate_pickups(ctx)
+    (lifted,) = [p for p in pickups if p.name == OBSTRUCTED]
+    detour = lifted.detour
+    assert detour is not None and detour.over == ("BOX",)
+    # BPARK's hand is 10.7 cm high, above the lift: only the via above the pin is needed
+    assert len(detour.configurations) == 1
+    # the lift clears the box's top (4.90 cm) by the distance the sweep asked of the pair and
+    # the hand's reach below its origin (the finger pads' radius, 0.25 in), and 1 cm
+    assert detour.height >= 0.049 + 0.25 * 0.0254 + 0.01
+    assert [d.label for d in lifted.strategy.approach_detour] == ["lift 1"]
+    # Independent: the lifted path sampled densely (8 per mm of hand travel) with Coal's exact
+    # distances keeps the sweep's clearance from BOX at its nominal pose, and touches nothing
+    # with BOX at each corner of its error box (±0.3 in, ±0.2 in, ±5° about its vertical axis:
+    # the extreme displacements of its corners), sampled at 2 per mm
+    q_app = lifted.q_approach
+    scene = ctx.gross.empty_hand(lifted.strategy.approach_opening)
+    points = [ctx.q_park, *detour.configurations, q_app]
+    box = [k for k, pair in enumerate(scene.pairs) if "BOX" in pair]
+
+    def path(per_mm: float) -> list[np.ndarray]:
+        out = []
+        for a, b in itertools.pairwise(points):
+            travel = np.linalg.norm(ctx.arm.forward(b).translation - ctx.arm.forward(a).translation)
+            out += [a + u * (b - a) for u in np.linspace(0, 1, max(2, int(per_mm * 1e3 * travel)))]
+        return out
+
+    closest = min(float(np.min(scene.distances(q)[box])) for q in path(8))
+    assert closest > ctx.gross.options_for(scene).clearance
+    nominal = {o.name: o for o in scene.environment}
+    for x, y, rz in itertools.product((-0.3, 0.3), (-0.2, 0.2), (-5.0, 5.0)):
+        error = pin.SE3(pin.utils.rotate("z", math.radians(rz)), np.array([x, y, 0.0]) * 0.0254)
+        moved = [
+            Obstacle(o.name, o.geometry, o.pose * error if o.name == "BOX" else o.pose)
+            for o in nominal.values()
+        ]
+        scene.reposition(moved, scene.held)
+        assert not any(scene.collisions(q) for q in path(2)), (x, y, rz)
 
 
 def test_without_the_sweep_the_replay_catches_the_collision(old_base, monkeypatch) -> None:

@@ -365,8 +365,9 @@ def test_a_proven_program_is_kept_when_nothing_at_the_lead_is_accepted() -> None
 def test_a_sequence_proven_with_a_miss_is_kept_when_nothing_at_the_lead_is_planned(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    # The two-pin sequence's first proof passes, 198 of 200 (confirmed), but trial 52 misses
-    # BH1 under the seed's Δr_ok: the pipeline plans the sequence again at the lead. When that
+    # The two-pin sequence's first proof passes, 199 of 200 (198 before its second pickup was
+    # lifted over the box: another grasp), but a trial misses BH1 under the seed's Δr_ok: the
+    # pipeline plans the sequence again at the lead. When that
     # plan is refused (here: the planner's second call raises as a refusal would), the first
     # sequence, whose proof passed, is written, and its proof is the synthesis's.
     import synth.pipeline as pipeline
@@ -388,7 +389,7 @@ def test_a_sequence_proven_with_a_miss_is_kept_when_nothing_at_the_lead_is_plann
     assert calls == [False, True]
     (only,) = synthesis.attempts
     assert only.refuted == "dr_ok" and synthesis.proof is only.proof
-    assert only.proof.passed and (only.proof.trials, only.proof.successes) == (200, 198)
+    assert only.proof.passed and (only.proof.trials, only.proof.successes) == (200, 199)
     failure = only.proof.first_failure
     assert failure is not None and failure.message.startswith("PIN1 MISSED BH1")
     assert all(AT_THE_LEAD not in s.strategy.name for s in synthesis.sequence.steps)

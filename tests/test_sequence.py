@@ -17,6 +17,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from _paths import DATA_TASKS, GOLDEN, SEED_TASK, TASKS
+from _tasks import without_lifts
 
 from synth.cli import main
 from synth.codegen.sequence import SequenceStep, emit_sequence
@@ -284,6 +285,8 @@ def _nominal(context: Any) -> tuple[Any, HandErrors]:
 def test_a_sequence_whose_proof_fails_at_its_goal_plans_again(monkeypatch) -> None:
     # The sequence planner gave up ("1 of 1 candidates at proof") when the failed trial ended
     # without an AL line: the goal verdict's pin now names the step, whose strategy is banned.
+    # (With lifts, a lifted plan misses a hole before any goal failure: lifts are off here.)
+    without_lifts(monkeypatch)
     task = load_task(DATA_TASKS / "sequence_goal_failure.yaml")
     options = SynthesisOptions(proof=ProofOptions(trials=30, seed=0, workers=1))
     # PIN1 was left beside the box with the hand on its face, which the planner now foresees
@@ -376,11 +379,13 @@ def test_a_correction_that_leaves_the_far_hole_known_worse_is_left_out():
 REARRANGE = DATA_TASKS / "rearrange_two_pins.yaml"
 
 
-def test_a_step_gives_up_its_best_plan_when_it_leaves_no_next_step():
+def test_a_step_gives_up_its_best_plan_when_it_leaves_no_next_step(monkeypatch) -> None:
     # PIN2 must leave BH1 before PIN1 can go in. PIN2's best plan from the park (γ = 100°) ends
-    # the arm where every pickup of PIN1 sweeps a finger, the palm or the wrist into PIN2 in
-    # BH2 (or leaves the approach blocked): the sequence was refused. Its next-best plan ends
-    # where PIN1's pickup is clear.
+    # the arm where every straight pickup of PIN1 sweeps a finger, the palm or the wrist into
+    # PIN2 in BH2 (or leaves the approach blocked): the sequence was refused. Its next-best
+    # plan ends where PIN1's pickup is clear. (Lifted over PIN2, PIN1's pickup is clear after
+    # the best plan too: test_a_step_keeps_its_best_plan_when_the_next_pickup_is_lifted.)
+    without_lifts(monkeypatch)
     spec = load_task(REARRANGE)
     check = _step_check(DATA_TASKS, {})
     plan = plan_sequence(spec, check, base_dir=DATA_TASKS, compare=False)
@@ -403,6 +408,19 @@ def test_a_step_gives_up_its_best_plan_when_it_leaves_no_next_step():
         DATA_TASKS,
     )
     assert isinstance(refused, Rejection) and refused.kind == "collision"
+
+
+def test_a_step_keeps_its_best_plan_when_the_next_pickup_is_lifted() -> None:
+    # The same rearrangement, with gross motions lifted over the workcell: PIN2's best plan
+    # (γ = 100°) is kept, and PIN1's pickup from where it ends rises over PIN2 in BH2.
+    spec = load_task(REARRANGE)
+    check = _step_check(DATA_TASKS, {})
+    plan = plan_sequence(spec, check, base_dir=DATA_TASKS, compare=False)
+    first, second = plan.steps
+    assert first.strategy.pickup.grasp.gamma == pytest.approx(math.radians(100))
+    lifts = second.strategy.pickup.approach_detour
+    assert lifts and all(d.base == "NILTRANS" for d in lifts)
+    assert any("lifted over PIN2" in d for d in second.strategy.decisions)
 
 
 @pytest.mark.slow

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import pinocchio as pin
 
-from synth.codegen.literals import Fragment, pose
+from synth.codegen.literals import Fragment, pose, trans
 from synth.exceptions import CodegenError
 
 __all__ = ["Guard", "MoveView", "Waypoint", "motion_sequence"]
@@ -32,18 +32,20 @@ class Waypoint:
     """A checked destination: make ``what`` coincide with ``base*xf`` (seed L1912–1925).
 
     ``what`` and ``base`` are validated AL names (``base`` may be a program variable such as
-    the search loop's ``SETPNT``); ``xf`` is the constant relation [m, rad]; ``field`` names the
-    record field it came from, for error messages.
+    the search loop's ``SETPNT``, or None: ``xf`` is then a world pose); ``xf`` is the constant
+    relation [m, rad]; ``field`` names the record field it came from, for error messages.
     """
 
     what: Fragment
-    base: Fragment
+    base: Fragment | None
     xf: pin.SE3
     field: str
 
     @property
     def location(self) -> Fragment:
-        """``base*TRANS(...)``."""
+        """``base*TRANS(...)``, or ``TRANS(...)`` in the world."""
+        if self.base is None:
+            return trans(self.xf, field=self.field)
         return pose(self.base, self.xf, field=self.field)
 
 

@@ -41,7 +41,12 @@ from synth.codegen.literals import Fragment
 from synth.codegen.motion import Guard, MoveView, Waypoint, motion_sequence
 from synth.exceptions import CodegenError
 from synth.models.graph import AttributeGraph
-from synth.strategies.records import Destination, PinInHoleStrategy, grasp_remarks
+from synth.strategies.records import (
+    WORLD_BASE,
+    Destination,
+    PinInHoleStrategy,
+    grasp_remarks,
+)
 
 __all__ = [
     "AttemptView",
@@ -272,11 +277,10 @@ def _positive(value: float, field: str) -> float:
 def _waypoint(
     names: _Names, d: Destination, field: str, *, base: Fragment | None = None
 ) -> Waypoint:
+    if base is None and d.base != WORLD_BASE:
+        base = names.movable(d.base, f"{field}.base")
     return Waypoint(
-        what=names.movable(d.what, f"{field}.what"),
-        base=base if base is not None else names.movable(d.base, f"{field}.base"),
-        xf=d.xf,
-        field=f"{field}.xf",
+        what=names.movable(d.what, f"{field}.what"), base=base, xf=d.xf, field=f"{field}.xf"
     )
 
 
@@ -309,13 +313,19 @@ def _pickup(s: PinInHoleStrategy, names: _Names, pin_: Fragment) -> PickupView:
         raise CodegenError("pickup.object", f"picks up {p.object!r}, not the pin {s.pin!r}")
     approach = motion_sequence(
         [
+            *(_waypoint(names, d, "pickup.approach_detour") for d in p.approach_detour),
             _waypoint(names, p.approach_point, "pickup.approach_point"),
             _waypoint(names, p.grasp_point, "pickup.grasp_point"),
         ],
         field="pickup.approach_point",
     )
+    # the transport's detour continues the departure: one unguarded MOVE of the pin, ending
+    # above the approach point, where the guarded first attempt (or the tap) starts
     departure = motion_sequence(
-        [_waypoint(names, p.departure_point, "pickup.departure_point")],
+        [
+            _waypoint(names, p.departure_point, "pickup.departure_point"),
+            *(_waypoint(names, d, "transport_detour") for d in s.transport_detour),
+        ],
         field="pickup.departure_point",
     )
     return PickupView(

@@ -39,9 +39,10 @@ from synth.errors.estimate import RelationModel
 from synth.models.world import World
 from synth.strategies.bow import BOW_FRACTION, AxisPath, plan_axis_path
 from synth.strategies.context import Configuration, PlanContext, end_from_hand, hand_at
+from synth.strategies.detour import Detour, lift_over
 from synth.strategies.grasp import Pickup
 from synth.strategies.hypotheses import ApproachPhi, ApproachStandoff
-from synth.strategies.records import Destination, PinInHoleStrategy, Rejection
+from synth.strategies.records import WORLD_BASE, Destination, PinInHoleStrategy, Rejection
 from synth.strategies.relations import approach_relation, hole_frame_offset
 
 __all__ = [
@@ -87,11 +88,26 @@ class Candidate:
     world: World
     axis: AxisPath | None = None
     counter: int = 0
+    transport_detour: Detour | None = None
+    """The transport lifted over the workcell (:mod:`synth.strategies.detour`), if it is."""
 
     @property
     def name(self) -> str:
         """Label: grasp and φ."""
         return self.strategy.name
+
+    @property
+    def q_transported(self) -> Configuration:
+        """Where the departure move ends: its detour's last via point, or the departure point.
+
+        The tap or the first attempt starts there.
+        """
+        return self.transport_vias[-1] if self.transport_vias else self.pickup.q_departure
+
+    @property
+    def transport_vias(self) -> tuple[Configuration, ...]:
+        """The arm at the transport detour's via points, in order (none: a straight move)."""
+        return () if self.transport_detour is None else self.transport_detour.configurations
 
     @property
     def cost(self) -> float:
@@ -152,11 +168,13 @@ def plan_approach(ctx: PlanContext, pickup: Pickup) -> Candidate | Rejection:
             f"no φ in 0°…315° has arm solutions at the approach and destination points of "
             f"{ctx.hole_al}",
         )
-    # The quickest φ (L2160) whose transport is clear of the workcell.
+    # The quickest φ (L2160) whose transport is clear of the workcell; failing every one, the
+    # quickest whose transport lifted over the workcell is
     carrying = ctx.gross.holding(grasp)
     best: tuple[float, float, Configuration, Configuration] | None = None
     first_reason: str | None = None
-    for entry in sorted(timed, key=lambda e: (e[0], e[1])):
+    ordered = sorted(timed, key=lambda e: (e[0], e[1]))
+    for entry in ordered:
         reason = ctx.obstruction(
             carrying,
             [pickup.q_departure, entry[2]],
@@ -166,9 +184,29 @@ def plan_approach(ctx: PlanContext, pickup: Pickup) -> Candidate | Rejection:
             best = entry
             break
         first_reason = first_reason or reason
+    # An obstructed φ quicker than that one may be quicker still lifted over what is in the
+    # way (a lift only adds time, so the φ no quicker straight are not tried)
+    detour: Detour | None = None
+    lifted_reason = ""
+    best_time = math.inf if best is None else best[0]
+    for entry in ordered:
+        if entry[0] >= best_time:
+            break
+        lifted = lift_over(ctx, carrying, pickup.q_departure, entry[2])
+        if isinstance(lifted, str):
+            lifted_reason = lifted_reason or lifted
+            continue
+        lifted_time = ctx.motion([pickup.q_departure, *lifted.configurations, entry[2], entry[3]])
+        if lifted_time < best_time:
+            best, detour, best_time = entry, lifted, lifted_time
     if best is None:
-        return Rejection(pickup.name, f"every φ is obstructed; the quickest: {first_reason}")
+        return Rejection(
+            pickup.name,
+            f"every φ is obstructed; the quickest: {first_reason}; lifted: {lifted_reason}",
+        )
     _, phi, q_app, q_dest = best
+    vias = () if detour is None else detour.configurations
+    hand_from_pin = grasp.pin_from_hand().inverse()
     q_surface = ctx.nearest(hand_at(ctx, grasp, hole_frame_offset(phi, (0.0, 0.0, 0.0))), q_dest)
     if q_surface is None:
         return Rejection(pickup.name, f"no arm solution with the pin on the surface at φ={phi}")
@@ -193,7 +231,7 @@ def plan_approach(ctx: PlanContext, pickup: Pickup) -> Candidate | Rejection:
     above_seat = [
         q for z, q in zip(axis.heights[1:-1], axis.configurations[1:-1], strict=True) if z > -d_f
     ]
-    transport = ctx.motion([pickup.q_departure, q_app, *above_seat, q_dest])
+    transport = ctx.motion([pickup.q_departure, *vias, q_app, *above_seat, q_dest])
     try_time = ctx.motion([q_surface, q_app, q_surface])
     name = f"{pickup.name} φ={math.degrees(phi):.0f}°"
     strategy = PinInHoleStrategy(
@@ -220,11 +258,27 @@ def plan_approach(ctx: PlanContext, pickup: Pickup) -> Candidate | Rejection:
             for k, z in enumerate(axis.via_heights)
         ),
         bow=axis.bow,
+        transport_detour=()
+        if detour is None
+        else tuple(
+            Destination(f"lift {k + 1}", ctx.pin_al, WORLD_BASE, hand * hand_from_pin)
+            for k, hand in enumerate(detour.world_from_hand)
+        ),
     )
     world = pickup.world.with_facts(
         ApproachPhi(ctx.pin_al, ctx.hole_al, round(phi, 12)),
         ApproachStandoff(ctx.pin_al, ctx.hole_al, standoff),
     )
     return Candidate(
-        strategy, pickup, q_app, q_dest, q_surface, transport, try_time, tuple(table), world, axis
+        strategy,
+        pickup,
+        q_app,
+        q_dest,
+        q_surface,
+        transport,
+        try_time,
+        tuple(table),
+        world,
+        axis,
+        transport_detour=detour,
     )

@@ -128,7 +128,7 @@ def fine_motion_obstruction(
     tap = strategy.tap
     if tap is not None:
         pin_from_hand = grasp.pin_from_hand()
-        q_via = ctx.nearest(_pin_world(ctx, tap.via) * pin_from_hand, cand.pickup.q_departure)
+        q_via = ctx.nearest(_pin_world(ctx, tap.via) * pin_from_hand, cand.q_transported)
         q_tap = (
             None
             if q_via is None

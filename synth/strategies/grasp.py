@@ -45,9 +45,17 @@ from synth.models.manipulator import HandSpec
 from synth.models.spec import PinShape
 from synth.models.world import World
 from synth.strategies.context import Configuration, PinEnd, PlanContext, hand_at
+from synth.strategies.detour import Detour, lift_over
 from synth.strategies.hypotheses import Affixed, At, GraspDetermination, Holding
 from synth.strategies.options import PlanOptions
-from synth.strategies.records import Destination, Grasp, GraspStrategy, Rejection, grasp_remarks
+from synth.strategies.records import (
+    WORLD_BASE,
+    Destination,
+    Grasp,
+    GraspStrategy,
+    Rejection,
+    grasp_remarks,
+)
 
 """World atom for a grasp determination of NILTRANS: ``center`` holds the pin exactly (L2630)."""
 
@@ -408,6 +416,8 @@ class Pickup:
     move_time: float
     lift_time: float
     world: World
+    detour: Detour | None = None
+    """The move from the park lifted over the workcell (:mod:`synth.strategies.detour`)."""
 
     @property
     def name(self) -> str:
@@ -580,14 +590,17 @@ def _pickup(
     q_departure = ctx.nearest(ctx.world_pin * _translation(lift) * pin_from_hand, q_grasp)
     if q_departure is None:
         return Rejection(grasp_label(grasp), "no arm solution at the departure point")
-    blocked = ctx.obstruction(
-        ctx.gross.empty_hand(approach_opening),
-        [ctx.q_park, q_approach],
-        f"move from {ctx.park_al} to the grasp's approach point",
-    )
+    empty_hand = ctx.gross.empty_hand(approach_opening)
+    motion = f"move from {ctx.park_al} to the grasp's approach point"
+    blocked = ctx.obstruction(empty_hand, [ctx.q_park, q_approach], motion)
+    detour: Detour | None = None
     if blocked is not None:
-        return Rejection(grasp_label(grasp), blocked)
-    move_time = ctx.motion([ctx.q_park, q_approach, q_grasp])
+        lifted = lift_over(ctx, empty_hand, ctx.q_park, q_approach)
+        if isinstance(lifted, str):
+            return Rejection(grasp_label(grasp), f"{blocked}; lifted: {lifted}")
+        detour = lifted
+    vias = [] if detour is None else list(detour.configurations)
+    move_time = ctx.motion([ctx.q_park, *vias, q_approach, q_grasp])
     lift_time = ctx.motion([q_grasp, q_departure])
     goodness = opts.open_time + move_time + opts.center_time + lift_time
     pin_al, hand_al = ctx.pin_al, ctx.hand_al
@@ -605,6 +618,12 @@ def _pickup(
         grasp_determination=centering.residual or None,
         remarks=grasp_remarks(grasp),
         centering=centering,
+        approach_detour=()
+        if detour is None
+        else tuple(
+            Destination(f"lift {k + 1}", hand_al, WORLD_BASE, pose)
+            for k, pose in enumerate(detour.world_from_hand)
+        ),
     )
     world = ctx.base_world.child(grasp_label(grasp)).with_facts(
         Holding(hand_al, pin_al),
@@ -612,4 +631,4 @@ def _pickup(
         GraspDetermination(pin_al, centering.residual),
         At(pin_al, "departure"),
     )
-    return Pickup(strategy, q_approach, q_grasp, q_departure, move_time, lift_time, world)
+    return Pickup(strategy, q_approach, q_grasp, q_departure, move_time, lift_time, world, detour)

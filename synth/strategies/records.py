@@ -31,12 +31,18 @@ def _se3_json(pose: pin.SE3) -> dict[str, list[float]]:
     }
 
 
+WORLD_BASE = "NILTRANS"
+"""The base of a destination given in the world: AL's identity frame."""
+
+
 @dataclass(frozen=True, eq=False)
 class Destination:
     """Make the controllable frame ``what`` coincide with ``base ∘ xf`` (seed L1912–1925).
 
     ``what`` and ``base`` are AL names (``BMANIP``, ``PIN1``, ``BH1``); ``xf`` is a constant
     transform [m, rad]. ``label`` says which point of the strategy it is (``approach``, …).
+    A ``base`` of :data:`WORLD_BASE` makes ``xf`` the frame's world pose (a detour's via
+    points, :mod:`synth.strategies.detour`).
     """
 
     label: str
@@ -113,12 +119,16 @@ class GraspStrategy:
     preliminaries: tuple[str, ...] = ()
     remarks: str = ""
     centering: CenteringBounds | None = None
+    approach_detour: tuple[Destination, ...] = ()
+    """World via points of the hand before ``approach_point``, lifting the move from the park
+    over what stands between (:mod:`synth.strategies.detour`); empty: a straight move."""
 
     def to_json(self) -> dict[str, Any]:
         """JSON form (SI)."""
         return {
             "object": self.object,
             **self.grasp.to_json(),
+            "approach_detour": [d.to_json() for d in self.approach_detour],
             "approach_point": self.approach_point.to_json(),
             "grasp_point": self.grasp_point.to_json(),
             "departure_point": self.departure_point.to_json(),
@@ -314,6 +324,9 @@ class PinInHoleStrategy:
     """[m] the parts' geometric lead, chamfer + hole radius − tip radius: what the replay
     captures within (:func:`synth.models.insertion.exceeds_lead` compares ``dr_ok`` with it);
     None where it was not derived."""
+    transport_detour: tuple[Destination, ...] = ()
+    """World via points of the pin after the departure point, lifting the transport over what
+    stands between (:mod:`synth.strategies.detour`); empty: a straight move."""
 
     @property
     def expected_time(self) -> float:
@@ -379,6 +392,7 @@ class PinInHoleStrategy:
             "phi": self.phi,
             "dtry": self.dtry,
             "standoff": self.standoff,
+            "transport_detour": [v.to_json() for v in self.transport_detour],
             "approach_vias": [v.to_json() for v in self.approach_vias],
             "bow": self.bow,
             "tap": None if self.tap is None else self.tap.to_json(),

@@ -140,6 +140,15 @@ def refine(ctx: PlanContext, cand: Candidate) -> Refined | Rejection:
         )
     decisions.append(f"tilt Δθ = {_deg(fp.dtheta)} ≤ Δθ_ok = {_deg(ins.dtheta_ok)}")
     decisions.extend(ins.notes)  # a given Δθ_ok clipped to the wedging limit
+    for detour, motion in (
+        (cand.pickup.detour, f"the move from {ctx.park_al} to the grasp"),
+        (cand.transport_detour, f"the transport to {ctx.hole_al}"),
+    ):
+        if detour is not None:
+            decisions.append(
+                f"{motion} is lifted {detour.describe()} (two via points): a straight "
+                "joint-interpolated move would sweep into it"
+            )
     if fp.dz >= standoff:
         return Rejection(
             cand.name,

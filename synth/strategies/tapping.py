@@ -238,7 +238,7 @@ def plan_tap(ctx: PlanContext, cand: Candidate, footprint: ErrorFootprint) -> Ta
     grasp = cand.pickup.strategy.grasp
     q_via = ctx.nearest(
         hand_at(ctx, grasp, hole_frame_offset(phi, (offset[0], offset[1], opts.tap_travel))),
-        cand.pickup.q_departure,
+        cand.q_transported,
     )
     q_contact = (
         None
@@ -249,13 +249,13 @@ def plan_tap(ctx: PlanContext, cand: Candidate, footprint: ErrorFootprint) -> Ta
         return Rejection(cand.name, f"no arm solution at the tapping place {offset} m")
     blocked = ctx.obstruction(
         ctx.gross.holding(grasp),
-        [cand.pickup.q_departure, q_via],
+        [cand.q_transported, q_via],
         f"transport to the tap's via point above {ctx.graph.al_names[surface]}",
     )
     if blocked is not None:
         return Rejection(cand.name, blocked)
     extra = (
-        ctx.motion([cand.pickup.q_departure, q_via, q_contact])
+        ctx.motion([cand.pickup.q_departure, *cand.transport_vias, q_via, q_contact])
         + ctx.motion([q_contact, cand.q_hole_approach, cand.q_destination])
         - cand.transport_time
     )
