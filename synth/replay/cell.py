@@ -23,7 +23,7 @@ from synth.models.workcell import HoleSite, PinModel, Workcell
 from synth.replay.bounds import PinExtent
 from synth.replay.capture import inserted_depth
 from synth.replay.motion import MotionState
-from synth.replay.reach import ReachProblem, solve_near
+from synth.replay.reach import ReachProblem, branch_jump, solve_near
 from synth.replay.report import Violation
 
 __all__ = [
@@ -139,11 +139,14 @@ def configuration_of(arm: Arm, state: MotionState) -> NDArray[np.float64]:
     """The arm's joints [rad, m] in ``state``.
 
     The path's, or where the arm complied (the pin guided by a hole or sliding) the inverse of
-    the sensed hand nearest the path's.
+    the sensed hand nearest the path's. A compliance only another branch reaches keeps the
+    path's joints too: the replay stops such a motion there (``ReplayMachine``'s compliance
+    check), and a trace never shows the wrist turning 180° between two samples.
     """
     if state.q is not None:
         return state.q.copy()
     try:
-        return solve_near(arm, state.sensed, state.hint)
+        q = solve_near(arm, state.sensed, state.hint)
     except ReachProblem:
         return state.hint.copy()  # complied a hair beyond the model: keep the path
+    return state.hint.copy() if branch_jump(arm, q, state.hint) is not None else q

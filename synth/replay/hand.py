@@ -24,7 +24,6 @@ is. Opening the fingers into something is a ``collision`` (:func:`finger_collisi
 
 from __future__ import annotations
 
-import contextlib
 import math
 from collections.abc import Callable, Iterable, Sequence
 from typing import Literal
@@ -39,7 +38,7 @@ from synth.models.arm import HAND_BODIES, Arm, CollisionScene
 from synth.replay.capture import seat_depth, seated_pose
 from synth.replay.cell import PinState
 from synth.replay.motion import Motion, MotionState
-from synth.replay.reach import ReachProblem, solve_near
+from synth.replay.reach import solve_continuing
 from synth.replay.sweeps import pair_collisions
 
 __all__ = ["finger_collision", "grasp", "grasp_candidate", "hand_motion", "release"]
@@ -112,12 +111,13 @@ def grasp(
     """The pads close on ``state``'s pin, the arm centring by ``offset`` [m] along hand x.
 
     Returns the hand's new pose (reading = truth) and the arm's configuration; the pin is
-    held from now on.
+    held from now on. A centring move the arm's branch cannot make (a joint at its stop, or
+    out of reach) is a :class:`ReachProblem`: the pin is not grasped. It was once absorbed,
+    the joints kept while the hand moved, or set to another branch's (the wrist turned 180°
+    in no time, and the trial went on to succeed).
     """
     hand = true_hand * pin.SE3(np.eye(3), np.array([offset, 0.0, 0.0]))
-    # a centring move of a few mm at the edge of the workspace keeps the joints
-    with contextlib.suppress(ReachProblem):
-        q = solve_near(arm, hand, q)
+    q = solve_continuing(arm, hand, q, f"centring the hand {100 * offset:+.2f} cm along its x")
     state.grip = hand.actInv(state.pose)
     state.rests_on = None
     return hand, q

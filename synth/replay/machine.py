@@ -111,13 +111,26 @@ from synth.replay.cell import (
 from synth.replay.goal import goal_verdict
 from synth.replay.hand import finger_collision, grasp, grasp_candidate, hand_motion, release
 from synth.replay.motion import Motion, MotionObserver, MotionState, Phase, Segment, Slide, Stop
-from synth.replay.reach import ReachProblem, describe_pose, solve_near
+from synth.replay.reach import (
+    ReachProblem,
+    branch_jump,
+    describe_pose,
+    leaving_branch,
+    solve_near,
+)
 from synth.replay.report import Violation, ViolationKind
 from synth.replay.sweeps import SweepContext, sweep_segment
 from synth.replay.truth import HandErrors
 from synth.replay.walk import WalkContext, walk_segment
 
 __all__ = ["PinState", "ReplayMachine", "ReplayOptions", "ViolationStop", "configuration_of"]
+
+_COMPLIANCE_POINTS = 9
+"""Points of a guided or sliding phase where the arm's compliance is checked for its branch."""
+
+_STOP_MARGIN = 0.1
+"""[rad] (5.7°) A segment whose revolute joints all stay this far from their stops is not
+checked for a compliance that leaves the arm's branch (:meth:`ReplayMachine._far_from_stops`)."""
 
 
 class ReplayMachine(TimelineMachine[Motion]):
@@ -325,6 +338,7 @@ class ReplayMachine(TimelineMachine[Motion]):
             if held is not None:
                 walk = walk_segment(walking, held, seg, hole, slide)
                 pin_stop, hole, slide = walk.stop, walk.hole, walk.slide
+                pin_stop = self._complying(seg, held, pin_stop, line) or pin_stop
             else:
                 seg.phases = [Phase(0.0)]
             limit = 1.0 if pin_stop is None else pin_stop.s
@@ -368,6 +382,59 @@ class ReplayMachine(TimelineMachine[Motion]):
             lever = np.asarray(stop.point - hand.translation, dtype=float)
             contact_checkpoints(motion, stop.reaction, lever, self.options.stall_force)
         return motion
+
+    def _complying(
+        self, seg: Segment, held: PinState, pin_stop: Stop | None, line: int
+    ) -> Stop | None:
+        """A stop where the arm, complying with a hole or a slide, would leave its branch.
+
+        Guided by a hole the hand follows the pin, not the path: its pose is the path's
+        displaced by the guidance, and the joints are its inverse nearest the path's
+        (:func:`~synth.replay.cell.configuration_of`). Next to a joint's stop the branch may
+        not reach that pose; the nearest solution is then another branch, the wrist turned by
+        180°, which no compliance makes: a ``joint_limit`` violation. Checked at
+        :data:`_COMPLIANCE_POINTS` evenly spaced points of each guided or sliding phase: a
+        sampled check, not a proven one (the guidance changes slowly along a phase).
+        """
+        limit = 1.0 if pin_stop is None else pin_stop.s
+        if self._far_from_stops(seg):
+            return None
+        for k, phase in enumerate(seg.phases):
+            if phase.start > limit:
+                break
+            if phase.hole is None and phase.slide is None:
+                continue
+            end = min(seg.phases[k + 1].start if k + 1 < len(seg.phases) else 1.0, limit)
+            for s in np.linspace(phase.start, end, _COMPLIANCE_POINTS):
+                state = self._state(seg, s, held)
+                if state.q is not None:
+                    continue
+                try:
+                    q = solve_near(self.arm, state.sensed, state.hint)
+                except ReachProblem:
+                    continue  # complied a hair beyond the model: the path's joints stand
+                turned = branch_jump(self.arm, q, state.hint)
+                if turned is None:
+                    continue
+                guide = phase.hole.name if phase.hole is not None else "a face it slides on"
+                problem = leaving_branch(f"complying with {guide}", turned)
+                time = self._time + seg.time(float(s))
+                violation = self._violation(problem.kind, line, problem.detail, time)
+                return Stop(float(s), "violation", held.model.name, guide, violation=violation)
+        return None
+
+    def _far_from_stops(self, seg: Segment) -> bool:
+        """Every revolute joint stays :data:`_STOP_MARGIN` from its stops along ``seg``.
+
+        Along the straight q0 → q1 a joint's distance to a stop is linear, so its least is at an
+        end. A compliance of millimetres and a degree or two turns no joint that far on the
+        branch the arm stands on, so it cannot need another branch (a wrist turned 180°).
+        """
+        limits = self.arm.limits
+        revolute = np.array([kind == "revolute" for kind in limits.kinds])
+        ends = np.stack([seg.q0, seg.q1])[:, revolute]
+        lower, upper = limits.lower[revolute], limits.upper[revolute]
+        return bool(np.min(np.minimum(ends - lower, upper - ends)) > _STOP_MARGIN)
 
     # ---- the hand
 
@@ -429,7 +496,7 @@ class ReplayMachine(TimelineMachine[Motion]):
         floor = 0.0 if width is None else min(max(float(width), 0.0), self._opening)
         if candidate is not None and candidate[1] >= floor:
             state, diameter, offset = candidate
-            finish = lambda: self._grasp(state, offset)  # noqa: E731
+            finish = lambda: self._grasp(state, offset, line)  # noqa: E731
             return self._hand_operation("close", diameter, finish, monitors, constraints, line)
         return self._hand_operation("close", floor, None, monitors, constraints, line)
 
@@ -446,7 +513,7 @@ class ReplayMachine(TimelineMachine[Motion]):
         if candidate is None:
             return self._hand_operation("center", 0.0, None, monitors, constraints, line)
         state, diameter, offset = candidate
-        finish = lambda: self._grasp(state, offset)  # noqa: E731
+        finish = lambda: self._grasp(state, offset, line)  # noqa: E731
         return self._hand_operation("center", diameter, finish, monitors, constraints, line)
 
     def _grasp_candidate(self) -> tuple[PinState, float, float] | None:
@@ -454,8 +521,11 @@ class ReplayMachine(TimelineMachine[Motion]):
             self.arm, self.pins.values(), self.true_hand(), self._opening, self.options.pad_tilt
         )
 
-    def _grasp(self, state: PinState, offset: float) -> None:
-        self._sensed, self._q = grasp(self.arm, state, self.true_hand(), offset, self._q)
+    def _grasp(self, state: PinState, offset: float, line: int) -> None:
+        try:
+            self._sensed, self._q = grasp(self.arm, state, self.true_hand(), offset, self._q)
+        except ReachProblem as problem:
+            self._raise(self._violation(problem.kind, line, problem.detail, self._time))
         self._error = pin.SE3.Identity()
         self._invalidate()
 

@@ -26,7 +26,15 @@ from synth.models.arm.arm import Arm
 from synth.models.arm.rating import nearest_solution
 from synth.models.arm.stanford import StanfordInverse, stanford_inverse_all
 
-__all__ = ["ReachProblem", "describe_pose", "solve_near"]
+__all__ = [
+    "BRANCH_JUMP",
+    "ReachProblem",
+    "branch_jump",
+    "describe_pose",
+    "leaving_branch",
+    "solve_continuing",
+    "solve_near",
+]
 
 _TOLERANCE = 1e-9
 
@@ -53,6 +61,47 @@ def solve_near(arm: Arm, pose: pin.SE3, near: NDArray[np.float64]) -> NDArray[np
     if q is not None:
         return q
     raise _problem(arm, pose)
+
+
+BRANCH_JUMP = 0.5 * np.pi
+"""[rad] A revolute joint turning more than this to reach a pose a few millimetres away has left
+the arm's branch (a wrist flip turns two joints by π): no small motion gets there."""
+
+
+def branch_jump(arm: Arm, q: NDArray[np.float64], near: NDArray[np.float64]) -> str | None:
+    """The revolute joints ``q`` turns more than :data:`BRANCH_JUMP` from ``near``, in words."""
+    turned = [
+        f"{arm.limits.names[i]} by {np.degrees(abs(float(q[i] - near[i]))):.0f}°"
+        for i, kind in enumerate(arm.limits.kinds)
+        if kind == "revolute" and abs(float(q[i] - near[i])) > BRANCH_JUMP
+    ]
+    return ", ".join(turned) or None
+
+
+def leaving_branch(motion: str, turned: str) -> ReachProblem:
+    """The ``joint_limit`` problem of a small motion that only another branch makes."""
+    return ReachProblem(
+        "joint_limit",
+        f"{motion} needs a joint past its stop on the arm's branch; the nearest other solution "
+        f"turns {turned} at once",
+    )
+
+
+def solve_continuing(
+    arm: Arm, pose: pin.SE3, near: NDArray[np.float64], motion: str
+) -> NDArray[np.float64]:
+    """:func:`solve_near` for a small motion the arm makes without a planned path.
+
+    A centring move of a few millimetres is not swept joint by joint: the arm is set to the
+    solution it ends in. When the branch it stands on cannot reach (a joint at its stop), the
+    nearest attainable solution is another branch, and setting it would turn the wrist by
+    180° in no time. That is a ``joint_limit`` :class:`ReachProblem` naming ``motion``.
+    """
+    q = solve_near(arm, pose, near)
+    turned = branch_jump(arm, q, near)
+    if turned is not None:
+        raise leaving_branch(motion, turned)
+    return q
 
 
 def _degrees(angle_rad: float) -> str:
