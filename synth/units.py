@@ -225,7 +225,22 @@ def _parse_text(text: str, dim: Dimension) -> float:
     target = _dimensionality(dim)
     if q.dimensionality != target:
         raise UnitError(_wrong_dimension(text, q, dim))
+    if dim != "dimensionless" and ureg.get_root_units(q.units)[1] != _root(dim):
+        # pint counts the radian, the bit and the count as dimensionless alike: '2 bit' read as
+        # 2 rad, '5 m*rad' as 5 m. The units must reduce to the dimension's own
+        match = QUANTITY.fullmatch(text.strip())
+        unit = match["unit"] if match else text
+        raise UnitError(
+            f"{text!r} is not {_article(dim)}: {unit} is not a unit of {dim}; "
+            f"write {_article(dim)}, e.g. '{match['number'] if match else text} {_example(dim)}'"
+        )
     return si_magnitude(q, _SI_UNIT[dim], text, dim)
+
+
+@cache
+def _root(dim: Dimension) -> Any:
+    """The root units of ``dim``'s SI unit (radian for an angle, gram·metre/second² for a force)."""
+    return registry().get_root_units(_SI_UNIT[dim])[1]
 
 
 def _article(noun: str) -> str:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
 from synth.exceptions import UnitError
@@ -66,3 +68,34 @@ def test_a_number_that_is_not_finite_is_refused_as_such() -> None:
             parse_quantity(value, "length")
     with pytest.raises(UnitError, match="has no unit"):
         parse_quantity(1e308, "length")
+
+
+@pytest.mark.parametrize(
+    ("text", "dim"),
+    [
+        ("2 bit", "angle"),  # was read as 2 rad (114.6°): pint counts the bit dimensionless
+        ("1 count", "angle"),
+        ("3 sr", "angle"),  # a solid angle, rad²
+        ("5 m*rad", "length"),  # was read as 5 m
+        ("5 cm/rad", "length"),
+    ],
+)
+def test_a_dimensionless_unit_that_is_not_the_dimensions_own_is_refused(
+    text: str, dim: Dimension
+) -> None:
+    with pytest.raises(UnitError, match=f"is not a unit of {dim}"):
+        parse_quantity(text, dim)
+
+
+@pytest.mark.parametrize(
+    ("text", "dim", "si"),
+    [
+        ("1 turn", "angle", 2 * math.pi),
+        ("3 arcmin", "angle", math.radians(3 / 60)),
+        ("100 gradian", "angle", math.pi / 2),
+        ("8 oz", "force", 8 * 0.028349523125 * 9.80665),  # a weight, as AL writes forces
+        ("3 ft*lbf", "torque", 3 * 0.3048 * 0.45359237 * 9.80665),
+    ],
+)
+def test_the_dimensions_own_units_still_read(text: str, dim: Dimension, si: float) -> None:
+    assert parse_quantity(text, dim) == pytest.approx(si, rel=1e-12)
