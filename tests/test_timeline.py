@@ -170,3 +170,16 @@ def test_durations_of_different_segments_do_not_conflict() -> None:
     assert duration_conflict(c) is None
     late = DurationConstraint("<", 1.5, segment=0, line=2)
     assert duration_conflict([*c, late]) == (c[0], late)
+
+
+@pytest.mark.parametrize(("width", "statement"), [("100*CM", "OPEN"), ("-1*CM", "OPEN")])
+def test_an_opening_beyond_the_fingers_travel_is_a_violation(width: str, statement: str) -> None:
+    # The replay clamped OPEN BHAND TO 100*CM (or −1 cm) to the fingers' travel without a word:
+    # the seed's hand opens from 0 to 4.5 in = 11.43 cm (HandSpec.max_opening)
+    report = replay_program(f"{statement} BHAND TO {width};\n", SEED_TASK).nominal
+    assert report.outcome == "violation" and report.line == 1
+    assert report.violations[0].kind == "joint_limit"
+    assert "the fingers open from 0 to 11.43 cm" in report.message
+    # the full travel is within it
+    widest = replay_program("OPEN BHAND TO 4.5*INCHES;\n", SEED_TASK).nominal
+    assert widest.outcome == "failure" and widest.violations == ()  # the pin stays in RH1

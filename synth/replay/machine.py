@@ -471,7 +471,7 @@ class ReplayMachine(TimelineMachine[Motion]):
         line: int,
     ) -> MotionResult:
         """Open (or close) the fingers to ``width`` [m]; wider than a held pin lets it go."""
-        final = min(max(float(width), 0.0), self.arm.hand.max_opening)
+        final = self._opening_within_travel("OPEN", width, line)
         held = self.held_pin()
         if held is not None and final < self._opening:
             final = self._opening  # the pin stops the fingers
@@ -493,7 +493,11 @@ class ReplayMachine(TimelineMachine[Motion]):
         if self.held_pin() is not None:
             return self._hand_operation("close", self._opening, None, monitors, constraints, line)
         candidate = self._grasp_candidate()
-        floor = 0.0 if width is None else min(max(float(width), 0.0), self._opening)
+        floor = (
+            0.0
+            if width is None
+            else min(self._opening_within_travel("CLOSE", width, line), self._opening)
+        )
         if candidate is not None and candidate[1] >= floor:
             state, diameter, offset = candidate
             finish = lambda: self._grasp(state, offset, line)  # noqa: E731
@@ -515,6 +519,20 @@ class ReplayMachine(TimelineMachine[Motion]):
         state, diameter, offset = candidate
         finish = lambda: self._grasp(state, offset, line)  # noqa: E731
         return self._hand_operation("center", diameter, finish, monitors, constraints, line)
+
+    def _opening_within_travel(self, statement: str, width: float, line: int) -> float:
+        """``width`` [m], or a ``joint_limit`` violation when the fingers cannot reach it.
+
+        The fingers open from 0 to the hand's ``max_opening``; ``OPEN BHAND TO 100*CM`` (or
+        to −1 cm) was clamped to that travel without a word.
+        """
+        most = self.arm.hand.max_opening
+        if 0.0 <= width <= most + 1e-12:
+            return min(float(width), most)
+        detail = (
+            f"{statement} to {100 * width:.4g} cm: the fingers open from 0 to {100 * most:.4g} cm"
+        )
+        self._raise(self._violation("joint_limit", line, detail, self._time))
 
     def _grasp_candidate(self) -> tuple[PinState, float, float] | None:
         return grasp_candidate(
