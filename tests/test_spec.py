@@ -129,6 +129,14 @@ BAD = [
         12,
     ),
     (
+        "two axes in one rotation",
+        GOOD.replace(
+            "[0 cm, 0 cm, 4 cm]}", "[0 cm, 0 cm, 4 cm], rotation: [{z: 30 deg, x: 10 deg}]}"
+        ),
+        "frames[1].pose.rotation[0]",
+        12,
+    ),
+    (
         "short translation",
         GOOD.replace("[1 cm, 2 cm, 0 cm]", "[1 cm, 2 cm]"),
         "frames[0].pose.translation[2]",
@@ -172,6 +180,8 @@ def test_bad_spec_names_field_and_line(label: str, text: str, path: str, line: i
         assert info.value.detail == "unknown field"
     if label == "unknown rotation axis":  # not "axis: this field is required"
         assert info.value.detail.startswith("'w' is not an axis")
+    if label == "two axes in one rotation":  # not "z: unknown field", a valid key
+        assert info.value.detail.startswith("one axis per rotation, not 'z', 'x'")
 
 
 def test_coupled_constraint_units() -> None:

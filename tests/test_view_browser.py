@@ -174,6 +174,16 @@ def test_the_view_to_dash_goes_to_standard_output(
     assert not (tmp_path / "-").exists()
 
 
+def test_a_view_named_other_than_html_is_refused_before_any_work(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # `-o v.png` wrote the HTML page into v.png (while `synth plan --svg x.png` does write a
+    # PNG): the name is refused, exit 2, before the task is planned or replayed
+    assert main(["view", str(SEED_TASK), "-o", str(tmp_path / "v.png")]) == 2
+    assert "the view is an HTML page; name it .html" in capsys.readouterr().err
+    assert not (tmp_path / "v.png").exists()
+
+
 def test_a_program_that_never_moves_is_refused_with_why(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

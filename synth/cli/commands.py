@@ -9,6 +9,7 @@ from typing import Any
 
 from synth.cli.arguments import COUNT, PORT, add_workers_argument, resolve_workers
 from synth.cli.files import read_program, write_output
+from synth.exceptions import SynthError
 
 
 def _cmd_errors(args: argparse.Namespace) -> int:
@@ -62,6 +63,9 @@ def _cmd_view(args: argparse.Namespace) -> int:
     from synth.replay.run import replay_context
     from synth.replay.trace import record_run
 
+    if args.output != "-" and Path(args.output).suffix.lower() not in (".html", ".htm"):
+        # the page is HTML whatever the name says: `-o v.png` wrote HTML into v.png
+        raise SynthError(f"-o {args.output}: the view is an HTML page; name it .html (or '-')")
     base_dir = Path(args.task).resolve().parent
     spec = load_task(args.task)
     if args.program is not None:

@@ -71,6 +71,14 @@ class Rotation(SpecModel):
                     f"{key!r} is not an axis: a rotation is {{x|y|z: angle}} or "
                     "{axis: x|y|z, angle: …}"
                 )
+        if isinstance(data, dict) and len(data) > 1:
+            axes = [key for key in data if key in ("x", "y", "z")]
+            if axes:
+                # {z: 30 deg, x: 10 deg} was refused as "z: unknown field", a valid key
+                raise ValueError(
+                    f"one axis per rotation, not {', '.join(map(repr, data))}: write "
+                    f"[{', '.join(f'{{{k}: …}}' for k in axes)}], composed left to right"
+                )
         return data
 
 
