@@ -338,6 +338,22 @@ def _seed_with(old: str, new: str) -> tuple[str, int]:
             "frames[1].pose",
             "it is turned 2° from the box's top face",
         ),
+        # the rack moved onto the box's place: the two solids overlap from the start (a rack
+        # inside a plate was planned and "proven"); both centred there, the least translation
+        # that parts them is the rack's 2.247 cm height (Coal's penetration depth)
+        (
+            "pose: {translation: [24.1 cm, 117 cm, 0 cm]}",
+            "pose: {translation: [45.2 cm, 102 cm, 0 cm]}",
+            "frames[6].pose",
+            "box 'rack' overlaps box 'box' (by 2.247 cm)",
+        ),
+        # the box 3 cm under the table top
+        (
+            "pose: {translation: [45.2 cm, 102 cm, 0 cm]}          # T_wb, L2575",
+            "pose: {translation: [45.2 cm, 102 cm, -3 cm]}",
+            "frames[0].pose",
+            "box 'box' reaches 3 cm under the table top (z = 0)",
+        ),
     ],
 )
 def test_an_insertion_or_face_the_parts_contradict_is_refused_at_its_field(

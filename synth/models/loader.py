@@ -12,7 +12,9 @@ import math
 from pathlib import Path
 from typing import Any
 
+import coal
 import numpy as np
+import pinocchio as pin
 from pydantic import ValidationError
 from scipy.optimize import linprog
 
@@ -172,6 +174,7 @@ def check_task(spec: TaskSpec, lines: dict[PathKey, int] | None = None) -> None:
     check_contacts(spec, fail)  # contacts section: features exist, pairs and parents make sense
     _check_holes_fit(spec, fail)
     _check_outlines_fit(spec, fail)
+    _check_solids_apart(spec, fail)
 
 
 def _check_hole_surface(spec: TaskSpec, hole: int, surface: int, fail: Any) -> None:
@@ -311,6 +314,48 @@ def _check_outlines_fit(spec: TaskSpec, fail: Any) -> None:
                     f"outline vertex {k + 1} of {f.name!r} lies outside face {face.name} of box "
                     f"{owner!r} ({size} cm)",
                 )
+
+
+def _check_solids_apart(spec: TaskSpec, fail: Any) -> None:
+    """Fail if two box parts, or a box part and the table, overlap at their nominal places.
+
+    A rack standing inside a plate, or a plate 3 cm under the table top, was accepted: the
+    replay's solids then overlap from the start (the pin's tip inside the plate), and a plan
+    was "proven" in a workcell that cannot exist. Boxes that touch (a part on another, on the
+    table) are apart; one inside its own ancestor's box is left to the task (a boss on a plate).
+    Penetration is measured by Coal, beyond :data:`_FACE_DISTANCE`.
+    """
+    graph = AttributeGraph(spec)
+    boxes: list[tuple[int, str, coal.Box, pin.SE3]] = []
+    for i, f in enumerate(spec.frames):
+        if f.shape is None or f.shape.type != "box":
+            continue
+        size = np.array(f.shape.size, dtype=float)
+        centre = graph.world_from(f.name) * pin.SE3(np.eye(3), np.array([0.0, 0.0, size[2] / 2]))
+        boxes.append((i, f.name, coal.Box(*size), centre))
+    request, result = coal.DistanceRequest(), coal.DistanceResult()
+    for i, name, box, centre in boxes:
+        lowest = min(float((centre.act(np.array(c) * box.halfSide))[2]) for c in _CORNERS)
+        if lowest < -_FACE_DISTANCE:
+            fail(
+                ("frames", i, "pose"),
+                f"box {name!r} reaches {100 * -lowest:.4g} cm under the table top (z = 0)",
+            )
+            continue
+        for j, other, other_box, other_centre in boxes:
+            if j <= i or other in graph.ancestors(name) or name in graph.ancestors(other):
+                continue
+            result.clear()
+            depth = coal.distance(box, centre, other_box, other_centre, request, result)
+            if depth < -_FACE_DISTANCE:
+                fail(
+                    ("frames", j, "pose"),
+                    f"box {other!r} overlaps box {name!r} (by {100 * -depth:.4g} cm) at their "
+                    "nominal places",
+                )
+
+
+_CORNERS = [(x, y, z) for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
 
 
 def _check_holes_fit(spec: TaskSpec, fail: Any) -> None:
