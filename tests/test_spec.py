@@ -165,6 +165,17 @@ BAD = [
         "frames[0].uncertainty.constraints[0]",
         10,
     ),
+    (
+        # x = y exactly: errors of no volume, which the trials' rejection sampler never drew
+        # (synth plan gave up after 100 000 draws, naming no field)
+        "equality constraint",
+        GOOD.replace(
+            "rz: 5 deg",
+            "rz: 5 deg\n      constraints:\n        - {terms: {x: 1, y: -1}, min: 0 in, max: 0 in}",
+        ),
+        "frames[0].uncertainty.constraints[0]",
+        10,
+    ),
 ]
 
 
@@ -180,6 +191,8 @@ def test_bad_spec_names_field_and_line(label: str, text: str, path: str, line: i
         assert info.value.detail == "unknown field"
     if label == "unknown rotation axis":  # not "axis: this field is required"
         assert info.value.detail.startswith("'w' is not an axis")
+    if label == "equality constraint":
+        assert info.value.detail.startswith("min equals max")
     if label == "two axes in one rotation":  # not "z: unknown field", a valid key
         assert info.value.detail.startswith("one axis per rotation, not 'z', 'x'")
 

@@ -117,6 +117,13 @@ class LinearConstraint(SpecModel):
     def _ordered(self) -> LinearConstraint:
         if self.min is not None and self.max is not None and self.min > self.max:
             raise ValueError("constraint min exceeds max")
+        if self.min is not None and self.min == self.max:
+            # an equality leaves errors of no volume: the Monte Carlo trials draw none of them
+            # (the planner gave up after 100 000 draws, naming no field)
+            raise ValueError(
+                "min equals max: an equality between error parameters leaves no room to sample "
+                "the errors from; give min < max (a tolerance on the relation)"
+            )
         return self
 
 
