@@ -27,12 +27,15 @@ from synth.models.loader import parse_task
 MM = 1e-3
 
 
-def _equality_text() -> str:
-    """The seed task with the box's x and y errors tied equal (``min == max``)."""
+def _thin_text() -> str:
+    """The seed task with the box's x and y errors tied within 1e-11 m of each other.
+
+    (``min == max``, an exact equality, is refused by the loader at the constraint: test_spec.)
+    """
     return SEED_TASK.read_text(encoding="utf-8").replace(
         "      rz: 5 deg\n",
         "      rz: 5 deg\n      constraints:\n"
-        "        - {terms: {x: 1, y: -1}, min: 0 cm, max: 0 cm}\n",
+        "        - {terms: {x: 1, y: -1}, min: 0 cm, max: 1e-9 cm}\n",
         1,
     )
 
@@ -66,16 +69,16 @@ def test_an_infeasible_coupled_row_is_refused_after_the_budget_naming_it() -> No
     assert rng.bit_generator.state == expected.bit_generator.state
 
 
-def test_an_equality_the_loader_accepts_is_refused_by_the_sampler() -> None:
-    # min == max: the LP finds the line x = y feasible, but it has zero area in the square, so
-    # a uniform draw lands on it (within the 1e-12 m tolerance) with probability ~1e-9.
-    graph = AttributeGraph(parse_task(_equality_text()))
+def test_a_band_the_loader_accepts_is_refused_by_the_sampler() -> None:
+    # 0 ≤ x − y ≤ 1e-11 m: the LP finds the band feasible, but its area in the 0.6 × 0.4 in
+    # rectangle is ~1e-11 × 0.01 m², so a uniform draw lands in it with probability ~1e-9.
+    graph = AttributeGraph(parse_task(_thin_text()))
     unc = graph.links["box"].uncertainty
     assert unc is not None and len(unc.constraints) == 1
     space = ParameterSpace((ParameterBlock.from_uncertainty("box", unc),))
     with pytest.raises(SamplingError, match=r"uncertainty of box: 0 of 100032 draws") as caught:
         space.sample(np.random.default_rng(1), 1)
-    assert "box.x − box.y ≤ 0" in caught.value.detail
+    assert "box.x − box.y ≤ 1e-11" in caught.value.detail
     assert "−box.x + box.y ≤ 0" in caught.value.detail
 
 
@@ -106,8 +109,8 @@ def test_synth_replay_of_a_block_too_thin_to_sample_exits_2_with_one_line(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     # The nominal run draws nothing; the first trial draws the box's error and is refused.
-    task = tmp_path / "equality.yaml"
-    task.write_text(_equality_text(), encoding="utf-8")
+    task = tmp_path / "thin.yaml"
+    task.write_text(_thin_text(), encoding="utf-8")
     argv = ["replay", str(SEED_PROGRAM), "--task", str(task), "--trials", "1"]
     assert main(argv) == 2
     err = capsys.readouterr().err

@@ -128,13 +128,14 @@ def test_an_unhandled_error_is_answered_by_the_app_not_raised_to_the_server(
 def test_a_replay_of_an_error_block_too_thin_to_sample_fails_its_job_with_422(
     client: TestClient,
 ) -> None:
-    # box.x = box.y exactly: the loader's LP finds it feasible, the replay's rejection sampler
-    # cannot hit a line in a rectangle (synth.errors.parameters.SAMPLE_BUDGET); it used to draw
-    # for ever, holding the worker until the time budget killed it.
+    # box.x − box.y within 1e-11 m: the loader's LP finds it feasible, the replay's rejection
+    # sampler cannot hit so thin a band in a rectangle (synth.errors.parameters.SAMPLE_BUDGET);
+    # it used to draw for ever, holding the worker until the time budget killed it. (An exact
+    # equality, min == max, is refused by the loader.)
     spec = SEED_TASK.read_text(encoding="utf-8").replace(
         "      rz: 5 deg\n",
         "      rz: 5 deg\n      constraints:\n"
-        "        - {terms: {x: 1, y: -1}, min: 0 cm, max: 0 cm}\n",
+        "        - {terms: {x: 1, y: -1}, min: 0 cm, max: 1e-9 cm}\n",
         1,
     )
     answer = client.post("/v1/replays", json={"program": "BEGIN END", "spec": spec, "trials": 1})
