@@ -228,12 +228,7 @@ def _parse_text(text: str, dim: Dimension) -> float:
     if dim != "dimensionless" and ureg.get_root_units(q.units)[1] != _root(dim):
         # pint counts the radian, the bit and the count as dimensionless alike: '2 bit' read as
         # 2 rad, '5 m*rad' as 5 m. The units must reduce to the dimension's own
-        match = QUANTITY.fullmatch(text.strip())
-        unit = match["unit"] if match else text
-        raise UnitError(
-            f"{text!r} is not {_article(dim)}: {unit} is not a unit of {dim}; "
-            f"write {_article(dim)}, e.g. '{match['number'] if match else text} {_example(dim)}'"
-        )
+        raise UnitError(_not_a(text, dim, f"is not a unit of {dim}"))
     return si_magnitude(q, _SI_UNIT[dim], text, dim)
 
 
@@ -253,10 +248,15 @@ def _wrong_dimension(text: str, q: Any, dim: Dimension) -> str:
     The unit's own quantity is named from synth's dimensions; pint counts an angle as
     dimensionless, so a dimensionless unit is named an angle.
     """
-    match = QUANTITY.fullmatch(text.strip())
-    number, unit = (match["number"], match["unit"] or "") if match else (text, "")
     measured = next((d for d in _SI_UNIT if d not in ("dimensionless", dim) and _same(q, d)), None)
     what = f"measures {_article(measured)}" if measured else f"has dimension {q.dimensionality}"
+    return _not_a(text, dim, what)
+
+
+def _not_a(text: str, dim: Dimension, what: str) -> str:
+    """``'<text>' is not a <dim>: <unit> <what>; write a <dim>, e.g. '<number> <unit>'``."""
+    match = QUANTITY.fullmatch(text.strip())
+    number, unit = (match["number"], match["unit"] or "") if match else (text, "")
     return (
         f"{text!r} is not {_article(dim)}: {unit} {what}; write {_article(dim)}, "
         f"e.g. '{number} {_example(dim)}'"

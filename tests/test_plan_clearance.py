@@ -123,7 +123,7 @@ def test_without_the_sweep_the_replay_catches_the_collision(old_base, monkeypatc
     # The planner's choice with the sweep disabled is the program the replay refused.
     from synth.strategies.clearance import GrossMotionCheck
 
-    monkeypatch.setattr(GrossMotionCheck, "obstruction", lambda *a, **k: None)
+    monkeypatch.setattr(GrossMotionCheck, "obstructed", lambda *a, **k: None)  # every sweep
     # γ = 100° also puts the fingers 1.96 cm above the pin end, where a pin gone beside the
     # box would pass the success test (test_plan_beside.py): that check is left out too, so
     # the sweep alone is what tells the two plans apart

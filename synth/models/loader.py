@@ -19,6 +19,7 @@ from pydantic import ValidationError
 from scipy.optimize import linprog
 
 from synth.exceptions import FrameLookupError, SpecError
+from synth.models.arm.bodies import z_range
 from synth.models.features import Face, box_features, check_contacts
 from synth.models.graph import AttributeGraph
 from synth.models.jamming import fit_problem
@@ -335,7 +336,7 @@ def _check_solids_apart(spec: TaskSpec, fail: Any) -> None:
         boxes.append((i, f.name, coal.Box(*size), centre))
     request, result = coal.DistanceRequest(), coal.DistanceResult()
     for i, name, box, centre in boxes:
-        lowest = min(float((centre.act(np.array(c) * box.halfSide))[2]) for c in _CORNERS)
+        lowest = z_range(box, centre)[0]
         if lowest < -_FACE_DISTANCE:
             fail(
                 ("frames", i, "pose"),
@@ -353,9 +354,6 @@ def _check_solids_apart(spec: TaskSpec, fail: Any) -> None:
                     f"box {other!r} overlaps box {name!r} (by {100 * -depth:.4g} cm) at their "
                     "nominal places",
                 )
-
-
-_CORNERS = [(x, y, z) for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
 
 
 def _check_holes_fit(spec: TaskSpec, fail: Any) -> None:

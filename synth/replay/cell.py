@@ -30,6 +30,7 @@ __all__ = [
     "PinState",
     "ReplayOptions",
     "ViolationStop",
+    "complied",
     "configuration_of",
     "free_obstacles",
     "pin_states",
@@ -145,8 +146,20 @@ def configuration_of(arm: Arm, state: MotionState) -> NDArray[np.float64]:
     """
     if state.q is not None:
         return state.q.copy()
+    return complied(arm, state)[0]
+
+
+def complied(arm: Arm, state: MotionState) -> tuple[NDArray[np.float64], str | None]:
+    """Where the arm complied in ``state`` (its ``q`` is None), and what it would take.
+
+    The joints are the inverse of the sensed hand nearest the path's (``state.hint``), or the
+    path's where the model reaches no solution (it complied a hair beyond it). The second item
+    names the joints another branch would turn (:func:`~synth.replay.reach.branch_jump`) when
+    only that branch reaches: the path's joints are kept then too.
+    """
     try:
         q = solve_near(arm, state.sensed, state.hint)
     except ReachProblem:
-        return state.hint.copy()  # complied a hair beyond the model: keep the path
-    return state.hint.copy() if branch_jump(arm, q, state.hint) is not None else q
+        return state.hint.copy(), None
+    turned = branch_jump(arm, q, state.hint)
+    return (q if turned is None else state.hint.copy()), turned

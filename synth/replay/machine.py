@@ -104,6 +104,7 @@ from synth.replay.cell import (
     PinState,
     ReplayOptions,
     ViolationStop,
+    complied,
     configuration_of,
     free_obstacles,
     pin_states,
@@ -111,13 +112,7 @@ from synth.replay.cell import (
 from synth.replay.goal import goal_verdict
 from synth.replay.hand import finger_collision, grasp, grasp_candidate, hand_motion, release
 from synth.replay.motion import Motion, MotionObserver, MotionState, Phase, Segment, Slide, Stop
-from synth.replay.reach import (
-    ReachProblem,
-    branch_jump,
-    describe_pose,
-    leaving_branch,
-    solve_near,
-)
+from synth.replay.reach import ReachProblem, describe_pose, leaving_branch, solve_near
 from synth.replay.report import Violation, ViolationKind
 from synth.replay.sweeps import SweepContext, sweep_segment
 from synth.replay.truth import HandErrors
@@ -407,13 +402,7 @@ class ReplayMachine(TimelineMachine[Motion]):
             end = min(seg.phases[k + 1].start if k + 1 < len(seg.phases) else 1.0, limit)
             for s in np.linspace(phase.start, end, _COMPLIANCE_POINTS):
                 state = self._state(seg, s, held)
-                if state.q is not None:
-                    continue
-                try:
-                    q = solve_near(self.arm, state.sensed, state.hint)
-                except ReachProblem:
-                    continue  # complied a hair beyond the model: the path's joints stand
-                turned = branch_jump(self.arm, q, state.hint)
+                turned = None if state.q is not None else complied(self.arm, state)[1]
                 if turned is None:
                     continue
                 guide = phase.hole.name if phase.hole is not None else "a face it slides on"

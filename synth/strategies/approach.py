@@ -36,13 +36,14 @@ import numpy as np
 import pinocchio as pin
 
 from synth.errors.estimate import RelationModel
+from synth.models.arm import SweepResult
 from synth.models.world import World
 from synth.strategies.bow import BOW_FRACTION, AxisPath, plan_axis_path
 from synth.strategies.context import Configuration, PlanContext, end_from_hand, hand_at
 from synth.strategies.detour import Detour, lift_over
 from synth.strategies.grasp import Pickup
 from synth.strategies.hypotheses import ApproachPhi, ApproachStandoff
-from synth.strategies.records import WORLD_BASE, Destination, PinInHoleStrategy, Rejection
+from synth.strategies.records import Destination, PinInHoleStrategy, Rejection
 from synth.strategies.relations import approach_relation, hole_frame_offset
 
 __all__ = [
@@ -174,25 +175,27 @@ def plan_approach(ctx: PlanContext, pickup: Pickup) -> Candidate | Rejection:
     best: tuple[float, float, Configuration, Configuration] | None = None
     first_reason: str | None = None
     ordered = sorted(timed, key=lambda e: (e[0], e[1]))
+    straight: list[SweepResult] = []  # the sweeps of the obstructed φ, in that order
     for entry in ordered:
-        reason = ctx.obstruction(
+        blocked = ctx.obstructed(
             carrying,
             [pickup.q_departure, entry[2]],
             f"transport to the approach point of {ctx.hole_al} at φ={math.degrees(entry[1]):.0f}°",
         )
-        if reason is None:
+        if blocked is None:
             best = entry
             break
-        first_reason = first_reason or reason
+        first_reason = first_reason or blocked[0]
+        straight.append(blocked[1])
     # An obstructed φ quicker than that one may be quicker still lifted over what is in the
     # way (a lift only adds time, so the φ no quicker straight are not tried)
     detour: Detour | None = None
     lifted_reason = ""
     best_time = math.inf if best is None else best[0]
-    for entry in ordered:
+    for entry, sweep in zip(ordered, straight, strict=False):
         if entry[0] >= best_time:
             break
-        lifted = lift_over(ctx, carrying, pickup.q_departure, entry[2])
+        lifted = lift_over(ctx, carrying, pickup.q_departure, entry[2], sweep)
         if isinstance(lifted, str):
             lifted_reason = lifted_reason or lifted
             continue
@@ -206,7 +209,6 @@ def plan_approach(ctx: PlanContext, pickup: Pickup) -> Candidate | Rejection:
         )
     _, phi, q_app, q_dest = best
     vias = () if detour is None else detour.configurations
-    hand_from_pin = grasp.pin_from_hand().inverse()
     q_surface = ctx.nearest(hand_at(ctx, grasp, hole_frame_offset(phi, (0.0, 0.0, 0.0))), q_dest)
     if q_surface is None:
         return Rejection(pickup.name, f"no arm solution with the pin on the surface at φ={phi}")
@@ -260,10 +262,7 @@ def plan_approach(ctx: PlanContext, pickup: Pickup) -> Candidate | Rejection:
         bow=axis.bow,
         transport_detour=()
         if detour is None
-        else tuple(
-            Destination(f"lift {k + 1}", ctx.pin_al, WORLD_BASE, hand * hand_from_pin)
-            for k, hand in enumerate(detour.world_from_hand)
-        ),
+        else detour.destinations(ctx.pin_al, grasp.pin_from_hand().inverse()),
     )
     world = pickup.world.with_facts(
         ApproachPhi(ctx.pin_al, ctx.hole_al, round(phi, 12)),

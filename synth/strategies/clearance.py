@@ -71,6 +71,7 @@ from synth.models.arm import (
     HeldObject,
     Obstacle,
     SweepOptions,
+    SweepResult,
     swept_path,
 )
 from synth.models.arm.bodies import bounding_radius
@@ -491,6 +492,17 @@ class GrossMotionCheck:
         the sweep stopped to the end of that segment) and the distance it needs there: the
         clearance plus both bodies' margins along their closest points' direction.
         """
+        found = self.obstructed(scene, waypoints, motion, options)
+        return None if found is None else found[0]
+
+    def obstructed(
+        self,
+        scene: CollisionScene,
+        waypoints: Sequence[NDArray[np.float64]],
+        motion: str,
+        options: SweepOptions | None = None,
+    ) -> tuple[str, SweepResult] | None:
+        """:meth:`obstruction`'s reason, with the sweep that found it (its pair, its stop)."""
         options = options or self.options_for(scene)
         points = [np.asarray(w, dtype=float) for w in waypoints]
         result = swept_path(scene, points, options)
@@ -512,8 +524,9 @@ class GrossMotionCheck:
         required = result.required if result.required > 0 else float(options.required([pair])[0])
         x, y, z = (100.0 * float(v) for v in self.arm.forward(q_closest).translation)
         where = "touch" if closest <= 0 else f"come {100 * closest:.2f} cm apart"
-        return (
+        reason = (
             f"the {motion} sweeps {a} into {b} (they {where}; {100 * required:.2f} cm are "
             f"needed: {100 * options.clearance:.2f} cm clearance and their uncertainty; hand "
             f"at ({x:.2f}, {y:.2f}, {z:.2f}) cm; AL moves are joint-interpolated)"
         )
+        return reason, result

@@ -27,6 +27,7 @@ from synth.exceptions import SpecError
 from synth.models.arm import (
     Arm,
     CollisionScene,
+    SweepResult,
     motion_time,
     nearest_solution,
     task_arm,
@@ -168,8 +169,15 @@ class PlanContext:
         self, scene: CollisionScene, waypoints: list[Configuration], motion: str
     ) -> str | None:
         """Why a gross motion through ``waypoints`` is not clear, or None (one sweep, counted)."""
+        found = self.obstructed(scene, waypoints, motion)
+        return None if found is None else found[0]
+
+    def obstructed(
+        self, scene: CollisionScene, waypoints: list[Configuration], motion: str
+    ) -> tuple[str, SweepResult] | None:
+        """:meth:`obstruction`'s reason with the sweep that found it (one sweep, counted)."""
         self.counters.sweeps += 1
-        return self.gross.obstruction(scene, waypoints, motion)
+        return self.gross.obstructed(scene, waypoints, motion)
 
     def bound(self, objective: NDArray[np.float64], space: ParameterSpace) -> Interval:
         """Extrema of ``objective · v`` over ``space`` (closed form or LP), counted."""

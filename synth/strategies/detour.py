@@ -33,9 +33,11 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from synth.models.arm import CollisionScene
+from synth.models.arm import CollisionScene, SweepResult
+from synth.models.arm.bodies import z_range
 from synth.models.arm.sweep import swept_path
 from synth.strategies.context import Configuration, PlanContext
+from synth.strategies.records import WORLD_BASE, Destination
 
 __all__ = ["ROUNDS", "SLACK", "Detour", "lift_over"]
 
@@ -66,20 +68,18 @@ class Detour:
         """``over TOWER (the hand at 31.20 cm)``: for the plan's decisions."""
         return f"over {', '.join(self.over)} (the hand at {100 * self.height:.2f} cm)"
 
+    def destinations(
+        self, what: str, hand_from_what: pin.SE3 | None = None
+    ) -> tuple[Destination, ...]:
+        """The via points as world destinations of ``what``, labelled ``lift 1``, ``lift 2``.
 
-def _aabb_corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    return np.array(
-        [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
-    )
-
-
-def _world_z_range(geometry: object, world_from_shape: pin.SE3) -> tuple[float, float]:
-    """Lowest and highest world z of a Coal shape's local bounding box placed at a pose."""
-    geometry.computeLocalAABB()  # type: ignore[attr-defined]
-    box = geometry.aabb_local  # type: ignore[attr-defined]
-    corners = _aabb_corners(np.asarray(box.min_), np.asarray(box.max_))
-    z = corners @ world_from_shape.rotation[2] + world_from_shape.translation[2]
-    return float(z.min()), float(z.max())
+        ``what`` is the hand, or what it holds at ``hand_from_what``.
+        """
+        offset = pin.SE3.Identity() if hand_from_what is None else hand_from_what
+        return tuple(
+            Destination(f"lift {k + 1}", what, WORLD_BASE, hand * offset)
+            for k, hand in enumerate(self.world_from_hand)
+        )
 
 
 def _drop(scene: CollisionScene, q: Configuration, hand_z: float) -> float:
@@ -89,12 +89,12 @@ def _drop(scene: CollisionScene, q: Configuration, hand_z: float) -> float:
     lowest = hand_z
     for body in scene.bodies:
         if body.joint == joint and body.role != "environment":
-            lowest = min(lowest, _world_z_range(body.geometry, scene.body_pose(q, body.name))[0])
+            lowest = min(lowest, z_range(body.geometry, scene.body_pose(q, body.name))[0])
     return hand_z - lowest
 
 
 def _tops(scene: CollisionScene) -> dict[str, float]:
-    return {o.name: _world_z_range(o.geometry, o.pose)[1] for o in scene.environment}
+    return {o.name: z_range(o.geometry, o.pose)[1] for o in scene.environment}
 
 
 def _lifted(world_from_hand: pin.SE3, height: float) -> pin.SE3 | None:
@@ -107,12 +107,18 @@ def _lifted(world_from_hand: pin.SE3, height: float) -> pin.SE3 | None:
 
 
 def lift_over(
-    ctx: PlanContext, scene: CollisionScene, q_from: Configuration, q_to: Configuration
+    ctx: PlanContext,
+    scene: CollisionScene,
+    q_from: Configuration,
+    q_to: Configuration,
+    straight: SweepResult,
 ) -> Detour | str:
     """Via points that carry the straight move ``q_from → q_to`` over the workcell.
 
-    Returns a :class:`Detour` whose whole path (``q_from``, its configurations, ``q_to``) sweeps
-    clear, or why none was found (the module docstring gives the rule).
+    ``straight`` is the sweep that found the straight move obstructed (its pair is the first
+    solid to lift over). Returns a :class:`Detour` whose whole path (``q_from``, its
+    configurations, ``q_to``) sweeps clear, or why none was found (the module docstring gives
+    the rule).
     """
     options = ctx.gross.options_for(scene)
     tops = _tops(scene)
@@ -121,13 +127,10 @@ def lift_over(
         _drop(scene, q_from, float(start.translation[2])),
         _drop(scene, q_to, float(end.translation[2])),
     )
-    ctx.counters.sweeps += 1
-    result = swept_path(scene, [q_from, q_to], options)
+    result = straight
     over: list[str] = []
     need = 0.0
     for _ in range(ROUNDS):
-        if result.free:
-            break
         met = [name for name in (result.pair or ()) if name in tops]
         if not met:
             return f"it meets {' and '.join(result.pair or ('?',))}, which no lift clears"
@@ -152,6 +155,4 @@ def lift_over(
         result = swept_path(scene, [q_from, *configurations, q_to], options)
         if result.free:
             return Detour(tuple(poses), tuple(configurations), height, tuple(over))
-    if result.free:
-        return "the straight move is clear"
     return f"after {ROUNDS} lifts it still meets {' and '.join(result.pair or ('?',))}"

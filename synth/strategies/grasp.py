@@ -48,14 +48,7 @@ from synth.strategies.context import Configuration, PinEnd, PlanContext, hand_at
 from synth.strategies.detour import Detour, lift_over
 from synth.strategies.hypotheses import Affixed, At, GraspDetermination, Holding
 from synth.strategies.options import PlanOptions
-from synth.strategies.records import (
-    WORLD_BASE,
-    Destination,
-    Grasp,
-    GraspStrategy,
-    Rejection,
-    grasp_remarks,
-)
+from synth.strategies.records import Destination, Grasp, GraspStrategy, Rejection, grasp_remarks
 
 """World atom for a grasp determination of NILTRANS: ``center`` holds the pin exactly (L2630)."""
 
@@ -592,12 +585,13 @@ def _pickup(
         return Rejection(grasp_label(grasp), "no arm solution at the departure point")
     empty_hand = ctx.gross.empty_hand(approach_opening)
     motion = f"move from {ctx.park_al} to the grasp's approach point"
-    blocked = ctx.obstruction(empty_hand, [ctx.q_park, q_approach], motion)
+    blocked = ctx.obstructed(empty_hand, [ctx.q_park, q_approach], motion)
     detour: Detour | None = None
     if blocked is not None:
-        lifted = lift_over(ctx, empty_hand, ctx.q_park, q_approach)
+        reason, straight = blocked
+        lifted = lift_over(ctx, empty_hand, ctx.q_park, q_approach, straight)
         if isinstance(lifted, str):
-            return Rejection(grasp_label(grasp), f"{blocked}; lifted: {lifted}")
+            return Rejection(grasp_label(grasp), f"{reason}; lifted: {lifted}")
         detour = lifted
     vias = [] if detour is None else list(detour.configurations)
     move_time = ctx.motion([ctx.q_park, *vias, q_approach, q_grasp])
@@ -618,12 +612,7 @@ def _pickup(
         grasp_determination=centering.residual or None,
         remarks=grasp_remarks(grasp),
         centering=centering,
-        approach_detour=()
-        if detour is None
-        else tuple(
-            Destination(f"lift {k + 1}", hand_al, WORLD_BASE, pose)
-            for k, pose in enumerate(detour.world_from_hand)
-        ),
+        approach_detour=() if detour is None else detour.destinations(hand_al),
     )
     world = ctx.base_world.child(grasp_label(grasp)).with_facts(
         Holding(hand_al, pin_al),

@@ -71,6 +71,21 @@ def box_at(
     return coal.Box(*size), pin.SE3(np.eye(3), np.array(centre, dtype=float))
 
 
+def z_range(geometry: coal.CollisionGeometry, world_from_shape: pin.SE3) -> tuple[float, float]:
+    """Lowest and highest world z [m] of a placed shape's local axis-aligned bounding box.
+
+    z is linear over the box, so its extremes are r·c ± |r|·h with r the rotation's third row,
+    c and h the box's centre and half-extents (plus the placement's own z).
+    """
+    geometry.computeLocalAABB()
+    box = geometry.aabb_local
+    lo, hi = np.asarray(box.min_), np.asarray(box.max_)
+    row = world_from_shape.rotation[2]
+    centre = float(row @ (lo + hi) / 2 + world_from_shape.translation[2])
+    reach = float(np.abs(row) @ (hi - lo) / 2)
+    return centre - reach, centre + reach
+
+
 def bounding_radius(geometry: coal.CollisionGeometry, placement: pin.SE3) -> float:
     """Radius [m] of a ball about the joint-frame origin that contains the placed shape.
 
