@@ -86,6 +86,7 @@ def test_the_pickup_whose_move_from_park_hits_the_box_is_lifted_over_it(old_base
     assert detour is not None and detour.over == ("BOX",)
     # BPARK's hand is 10.7 cm high, above the lift: only the via above the pin is needed
     assert len(detour.configurations) == 1
+    assert detour.describe().endswith(", 1 via point)")  # the decision said "two" here
     # the lift clears the box's top (4.90 cm) by the distance the sweep asked of the pair and
     # the hand's reach below its origin (the finger pads' radius, 0.25 in), and 1 cm
     assert detour.height >= 0.049 + 0.25 * 0.0254 + 0.01

@@ -57,6 +57,7 @@ def test_the_pickup_and_the_transport_are_lifted_over_the_tower(planned) -> None
     _, strategy = planned
     lifted = [d for d in strategy.decisions if "lifted over TOWER" in d]
     assert len(lifted) == 2, strategy.decisions
+    assert all(", 2 via points)" in d for d in lifted)
     # both via points of each are world poses (AL's NILTRANS base), the pin's for the transport
     assert [d.what for d in strategy.pickup.approach_detour] == ["BMANIP", "BMANIP"]
     assert [d.what for d in strategy.transport_detour] == ["PIN1", "PIN1"]

@@ -65,8 +65,13 @@ class Detour:
     over: tuple[str, ...]
 
     def describe(self) -> str:
-        """``over TOWER (the hand at 31.20 cm)``: for the plan's decisions."""
-        return f"over {', '.join(self.over)} (the hand at {100 * self.height:.2f} cm)"
+        """``over TOWER (the hand at 31.20 cm, 2 via points)``: for the plan's decisions.
+
+        One via point where the start is already that high (from the park, say).
+        """
+        n = len(self.world_from_hand)
+        vias = f"{n} via point{'s' if n != 1 else ''}"
+        return f"over {', '.join(self.over)} (the hand at {100 * self.height:.2f} cm, {vias})"
 
     def destinations(
         self, what: str, hand_from_what: pin.SE3 | None = None

@@ -146,8 +146,8 @@ def refine(ctx: PlanContext, cand: Candidate) -> Refined | Rejection:
     ):
         if detour is not None:
             decisions.append(
-                f"{motion} is lifted {detour.describe()} (two via points): a straight "
-                "joint-interpolated move would sweep into it"
+                f"{motion} is lifted {detour.describe()}: a straight joint-interpolated "
+                "move would sweep into it"
             )
     if fp.dz >= standoff:
         return Rejection(
