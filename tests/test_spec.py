@@ -176,6 +176,9 @@ BAD = [
         "frames[0].uncertainty.constraints[0]",
         10,
     ),
+    # a name is how messages and the service's plan list tell tasks apart
+    ("blank name", GOOD.replace("name: t\n", "name: '  '\n"), "name", 1),
+    ("two-line name", GOOD.replace("name: t\n", 'name: "t\\nu"\n'), "name", 1),
 ]
 
 
@@ -193,6 +196,10 @@ def test_bad_spec_names_field_and_line(label: str, text: str, path: str, line: i
         assert info.value.detail.startswith("'w' is not an axis")
     if label == "equality constraint":
         assert info.value.detail.startswith("min equals max")
+    if label == "blank name":
+        assert info.value.detail == "a task needs a name (it was blank)"
+    if label == "two-line name":
+        assert info.value.detail == "a task's name is one printable line, got 't\\nu'"
     if label == "two axes in one rotation":  # not "z: unknown field", a valid key
         assert info.value.detail.startswith("one axis per rotation, not 'z', 'x'")
 

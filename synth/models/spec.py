@@ -285,6 +285,17 @@ class TaskSpec(SpecModel):
     contacts: tuple[ContactSpec, ...] = ()
     proof: ProofSpec | None = None
 
+    @field_validator("name")
+    @classmethod
+    def _named(cls, v: str) -> str:
+        # The name is how messages, `synth plan --json` and the service's plan list tell
+        # tasks apart; a blank or multi-line one would print as nothing, or break a line.
+        if not v.strip():
+            raise ValueError("a task needs a name (it was blank)")
+        if not v.isprintable():
+            raise ValueError(f"a task's name is one printable line, got {v!r}")
+        return v
+
     @field_validator("frames")
     @classmethod
     def _nonempty(cls, v: tuple[FrameSpec, ...]) -> tuple[FrameSpec, ...]:
