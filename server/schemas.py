@@ -19,6 +19,8 @@ from pydantic import (
 )
 from pydantic_core import PydanticCustomError
 
+from synth.seeds import MAX_SEED
+
 _JSON_KINDS = {bool: "a boolean", int: "a number", float: "a number", list: "an array"}
 
 
@@ -191,7 +193,7 @@ class ReplayIn(BaseModel):
     trials: int | None = Field(
         default=None, ge=0, description="Monte Carlo trials (default: the server's)"
     )
-    seed: int = Field(default=0, ge=0, le=2**32 - 1, description="random seed of the trials")
+    seed: int = Field(default=0, ge=0, le=MAX_SEED, description="random seed of the trials")
 
     @model_validator(mode="after")
     def _one_task(self) -> ReplayIn:
@@ -288,7 +290,7 @@ class BatchTaskIn(BaseModel):
     trials: int | None = Field(
         default=None, ge=0, description="Monte Carlo trials (default: the server's)"
     )
-    seed: int = Field(default=0, ge=0, le=2**32 - 1, description="random seed of the trials")
+    seed: int = Field(default=0, ge=0, le=MAX_SEED, description="random seed of the trials")
     try_harder: bool = Field(default=False, description="planner: refine more candidates")
     exhaustive: bool = Field(default=False, description="planner: refine every candidate")
     validate_: bool = Field(

@@ -163,13 +163,20 @@ def test_serve_refuses_a_port_it_cannot_use(
     assert "Traceback" not in done.stderr
 
 
-def test_a_negative_seed_is_a_usage_error(capsys: pytest.CaptureFixture[str]) -> None:
-    # numpy's generators take non-negative seeds, and the service refuses others (422)
+@pytest.mark.parametrize("seed", ["-1", "4294967296"])
+def test_a_seed_outside_32_bits_is_a_usage_error(
+    capsys: pytest.CaptureFixture[str], seed: str
+) -> None:
+    # The CLI takes the service's range, 0 to 2³² − 1 (synth.seeds.MAX_SEED; the service
+    # answers 422 outside it): a seed one surface takes and the other refuses would make a run
+    # that cannot be repeated through the other.
     for command in (
         ["plan", str(SEED_TASK)],
         ["replay", str(SEED_PROGRAM), "--task", str(SEED_TASK)],
     ):
         with pytest.raises(SystemExit) as refused:
-            main([*command, "--seed", "-1"])
+            main([*command, "--seed", seed])
         assert refused.value.code == EXIT_USAGE
-        assert "argument --seed: a seed is 0 or more, got -1" in capsys.readouterr().err
+        assert f"argument --seed: a seed is 0 to 4294967295, got {seed}" in (
+            capsys.readouterr().err
+        )

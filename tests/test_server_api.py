@@ -366,9 +366,21 @@ def test_wrong_method_is_405(client: TestClient) -> None:
             "give either 'spec' or 'plan_id', not both",
         ),
         ({"plan_id": "0" * 32, "seed": -1}, ["body", "seed"], "greater than or equal to 0"),
+        (
+            {"plan_id": "0" * 32, "seed": 2**32},
+            ["body", "seed"],
+            "less than or equal to 4294967295",
+        ),
         ({"plan_id": "0" * 32, "extra": 1}, ["body", "extra"], "Extra inputs are not permitted"),
     ],
-    ids=["empty", "program-alone", "spec-and-plan", "negative-seed", "unknown-key"],
+    ids=[
+        "empty",
+        "program-alone",
+        "spec-and-plan",
+        "negative-seed",
+        "seed-over-32-bits",
+        "unknown-key",
+    ],
 )
 def test_malformed_replay_requests_are_422(
     client: TestClient, body: dict[str, object], loc: list[str], why: str

@@ -12,6 +12,7 @@ from server.deps import Reader, ServiceDep, SettingsDep
 from server.pictures import plan_svg_job, trace_job, view_html_job
 from server.schemas import Problem
 from server.service import SpecKind
+from synth.seeds import MAX_SEED
 
 router = APIRouter(prefix="/v1/plans", tags=["pictures"])
 
@@ -87,7 +88,7 @@ async def get_trace(
     trial: Annotated[
         int | None, Query(ge=0, description="Monte Carlo trial (default: the nominal run)")
     ] = None,
-    seed: Annotated[int, Query(ge=0, le=2**32 - 1, description="seed of the trials")] = 0,
+    seed: Annotated[int, Query(ge=0, le=MAX_SEED, description="seed of the trials")] = 0,
 ) -> JSONResponse:
     """The ``synth replay --trace`` document of a stored plan's program."""
     plan = await service.get_plan(plan_id)

@@ -36,6 +36,7 @@ from server.views import (
     plan_out,
 )
 from synth.exceptions import SpecError
+from synth.seeds import MAX_SEED
 
 router = APIRouter(prefix="/v1/plans", tags=["plans"])
 
@@ -130,7 +131,7 @@ async def create_plan(
     trials: Annotated[
         int | None, Query(ge=0, description="Monte Carlo trials (default: the server's)")
     ] = None,
-    seed: Annotated[int, Query(ge=0, le=2**32 - 1, description="seed of the trials")] = 0,
+    seed: Annotated[int, Query(ge=0, le=MAX_SEED, description="seed of the trials")] = 0,
     try_harder: Annotated[bool, Query(description="planner: refine more candidates")] = False,
     exhaustive: Annotated[bool, Query(description="planner: refine every candidate")] = False,
     validate: Annotated[bool, Query(description="replay the program (false: skip)")] = True,

@@ -13,6 +13,7 @@ from typing import Any, Literal, TextIO
 
 from synth.cores import available_cores
 from synth.exceptions import SynthError
+from synth.seeds import MAX_SEED
 
 EXIT_OK = 0
 EXIT_REPLAY_FAILED = 1
@@ -98,8 +99,8 @@ def integer_from_zero(noun: str, most: int | None = None) -> Callable[[str], int
     return parse
 
 
-SEED = integer_from_zero("seed")
-"""``--seed``: numpy's generators take non-negative seeds, and the service refuses others."""
+SEED = integer_from_zero("seed", MAX_SEED)
+"""``--seed``: 0 to :data:`~synth.replay.run.MAX_SEED`, the service's range too."""
 PORT = integer_from_zero("port", 65535)
 """``--port``: a TCP port, 0 (any free one) to 65535."""
 COUNT = integer_from_zero("count")
