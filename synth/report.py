@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -502,19 +502,40 @@ def replay_summary(report: ReplayReport) -> str:
     return "\n".join(lines)
 
 
-def trial_text(record: TrialRecord) -> str:
-    """A trial as text: outcome, AL line, message, time, and the errors it sampled."""
+def trial_text(record: TrialRecord, *, every_hand_error: bool = True) -> str:
+    """A trial as text: outcome, AL line, message, time, and the errors it sampled.
+
+    The hand's errors, one per motion target, are all listed, or with ``every_hand_error``
+    False (a list of failures) only those of the run's last motion, with a count of the rest.
+    A draw prints as ``hand (line 57, target 2)``: the second target (the destination after a
+    VIA) of the motion at line 57.
+    """
     run = record.run
     where = f" at line {run.line}" if run.line is not None else ""
     lines = [f"trial {record.index}: {run.outcome}{where}: {run.message}; {run.time:.2f} s"]
     for v in run.violations:
         lines.append(f"  violation: {v.kind} at line {v.line}: {v.detail}")
     for frame, values in record.errors.items():
-        parts = ", ".join(
-            f"{name} {value * 100:+.4f} cm"
-            if name in ("x", "y", "z")
-            else f"{name} {math.degrees(value):+.4f}°"
-            for name, value in values.items()
-        )
-        lines.append(f"  {frame}: {parts}")
+        lines.append(f"  {frame}: {_error_parts(values.items())}")
+    draws = run.hand_errors
+    if not every_hand_error and draws:
+        first = max(k for k, d in enumerate(draws) if d.target == 0)
+        earlier, draws = first, draws[first:]
+        if earlier:
+            lines.append(
+                f"  hand: {earlier} earlier target(s) not shown (--trial {record.index} lists them)"
+            )
+    for draw in draws:
+        where = "" if draw.line is None else f"line {draw.line}, "
+        lines.append(f"  hand ({where}target {draw.target + 1}): {_error_parts(draw.values)}")
     return "\n".join(lines)
+
+
+def _error_parts(values: Iterable[tuple[str, float]]) -> str:
+    """``x +0.0120 cm, rz -0.2000°``: error parameters [m, rad] in cm and degrees."""
+    return ", ".join(
+        f"{name} {value * 100:+.4f} cm"
+        if name in ("x", "y", "z")
+        else f"{name} {math.degrees(value):+.4f}°"
+        for name, value in values
+    )

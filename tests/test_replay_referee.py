@@ -57,10 +57,12 @@ from _paths import ROOT, SEED_PROGRAM, SEED_SEARCH, SEED_TASK
 
 from synth.cli import main
 from synth.cli.replay import _TrialOutput
+from synth.errors.parameters import ParameterBlock, ParameterSpace
 from synth.replay import ReplayOptions, machine_for, replay_context, replay_program, run_trial
 from synth.replay.report import RunReport
 from synth.replay.run import TrialRecord, trial_errors
 from synth.replay.truth import HandErrors, nominal_world
+from synth.seeds import trial_seed
 
 SYNTH = Path(sys.executable).parent / "synth"
 
@@ -223,6 +225,10 @@ def test_failures_and_min_success(capsys: pytest.CaptureFixture[str]) -> None:
     box = errors["box"]
     assert f"box: x {100 * box['x']:+.4f} cm, y {100 * box['y']:+.4f} cm" in out
     assert f"rz {math.degrees(box['rz']):+.4f}°" in out
+    # the hand's errors at the last motion (a search point of line 57: its VIA, its point);
+    # the 19 before are left to --trial 18
+    assert "hand: 19 earlier target(s) not shown (--trial 18 lists them)" in out
+    assert "hand (line 57, target 1): x " in out and "hand (line 57, target 2): x " in out
     code, _ = _cli(_replay_args(30, "--min-success", "0.96"), capsys)
     assert code == 0
     # With --json the exit code's reason is in the document too (`ok` is the nominal run's).
@@ -243,6 +249,25 @@ def test_one_trial_alone_is_the_trial_of_the_full_run(capsys: pytest.CaptureFixt
     assert record["index"] == 18 and record["seed"] == 0
     assert (record["outcome"], record["line"], record["time"]) == (run.outcome, run.line, run.time)
     assert record["errors"] == trial_errors(context, 0, 18)
+    # The hand's errors, drawn again from the trial's hand stream (the second child of its
+    # seed sequence) by the error space's own sampler, in batches of 32 as the replay draws:
+    # one per target, in the order the program moved.
+    _, hand_seed = trial_seed(0, 18).spawn(2)
+    manipulator = context.spec.manipulator
+    assert manipulator is not None
+    block = ParameterBlock.from_uncertainty("hand", manipulator.hand_error)
+    rng = np.random.default_rng(hand_seed)
+    drawn = np.vstack([ParameterSpace((block,)).sample(rng, 32) for _ in range(2)])
+    hand = record["hand_errors"]
+    assert len(hand) <= len(drawn)
+    for draw, row in zip(hand, drawn, strict=False):
+        assert [draw[name] for name in block.names] == row.tolist()
+    # Lines 28 (the grasp, with a VIA), 34 (the lift), 38 (the first attempt, with a VIA),
+    # then line 57's search moves, two targets each, the last of which aborts at line 60.
+    motions = [(d["line"], d["target"]) for d in hand]
+    assert motions[:5] == [(28, 0), (28, 1), (34, 0), (38, 0), (38, 1)]
+    searches = motions[5:]
+    assert searches == [(57, 0), (57, 1)] * (len(searches) // 2) and searches
 
 
 def test_diagnostic_options_are_checked(capsys: pytest.CaptureFixture[str]) -> None:

@@ -255,7 +255,7 @@ class _TrialOutput:
         from synth.report import trial_text
 
         for record in self.failures:
-            print(trial_text(record))
+            print(trial_text(record, every_hand_error=False))
 
 
 def add_replay_parser(sub: Any) -> None:

@@ -29,6 +29,7 @@ from typing import Any, Literal
 
 __all__ = [
     "OUTCOMES",
+    "HandDraw",
     "MonteCarloReport",
     "Outcome",
     "ReplayReport",
@@ -61,12 +62,32 @@ class Violation:
 
 
 @dataclass(frozen=True)
+class HandDraw:
+    """One hand positioning error a run drew: for target ``target`` of the motion at ``line``.
+
+    ``target`` counts the motion's targets from 0 (its via points, then its destination);
+    ``values``: the error's parameters by name (``x``, ``y``, ``z`` [m], ``rx``, ``ry``, ``rz``
+    [rad], the task's ``manipulator.hand_error`` block), in the order the block lists them.
+    """
+
+    line: int | None
+    target: int
+    values: tuple[tuple[str, float], ...]
+
+    def to_json(self) -> dict[str, Any]:
+        """``{"line", "target", "x", "y", …}`` (SI units)."""
+        return {"line": self.line, "target": self.target, **dict(self.values)}
+
+
+@dataclass(frozen=True)
 class RunReport:
     """One run of the program: its outcome, message, AL line, time [s] and statements executed.
 
     ``line`` is the AL line of the ABORT, the runtime error or the violation (None otherwise).
     ``unmet`` is the AL name of the first step's pin whose goal is not met, for a ``failure``
     of the task's goal (the run completed; a sequence's planner blames that step).
+    ``hand_errors``: the hand's positioning error at each target the run moved to, in order
+    (none in the believed world).
     """
 
     outcome: Outcome
@@ -76,6 +97,7 @@ class RunReport:
     statements: int
     violations: tuple[Violation, ...] = ()
     unmet: str | None = None
+    hand_errors: tuple[HandDraw, ...] = ()
 
     @property
     def success(self) -> bool:

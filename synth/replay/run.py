@@ -30,7 +30,7 @@ hand clear; a task without an insertion succeeds by running to its end) and ``fa
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -57,6 +57,7 @@ from synth.replay.report import MonteCarloReport, Outcome, ReplayReport, RunRepo
 from synth.replay.tally import TrialTally
 from synth.replay.trials import TrialPool, deferred_interrupts, iter_trials, job_for
 from synth.replay.truth import HandErrors, TrueWorld, nominal_world, sample_world
+from synth.seeds import trial_seed
 
 __all__ = [
     "ReplayContext",
@@ -184,7 +185,10 @@ def machine_for(context: ReplayContext, world: TrueWorld, hand_errors: HandError
 
 
 def run_machine(context: ReplayContext, machine: ReplayMachine) -> tuple[RunReport, Interpreter]:
-    """Run the program on ``machine``; the run's report and the interpreter (its beliefs)."""
+    """Run the program on ``machine``; the run's report and the interpreter (its beliefs).
+
+    The report carries the hand errors the run drew, each with its motion's line.
+    """
     budget = context.options
     interpreter = context.binding.interpreter(
         machine,
@@ -192,11 +196,17 @@ def run_machine(context: ReplayContext, machine: ReplayMachine) -> tuple[RunRepo
         max_time=budget.max_time,
         max_wall_time=budget.max_wall_time,
     )
+    report = _outcome(context, machine, interpreter)
+    return replace(report, hand_errors=tuple(machine.hand_errors.draws)), interpreter
+
+
+def _outcome(context: ReplayContext, machine: ReplayMachine, interpreter: Interpreter) -> RunReport:
+    """Run the program to its end, or to what stopped it: the run's report."""
     try:
         result = interpreter.run(context.program)
     except ViolationStop as stop:
         v = stop.violation
-        report = RunReport(
+        return RunReport(
             "violation",
             f"{v.kind}: {v.detail}",
             v.line,
@@ -204,23 +214,17 @@ def run_machine(context: ReplayContext, machine: ReplayMachine) -> tuple[RunRepo
             interpreter.statements,
             tuple(machine.violations),
         )
-        return report, interpreter
     except ALRuntimeError as error:
-        report = RunReport(
-            "error", error.problem, error.line, machine.time(), interpreter.statements
-        )
-        return report, interpreter
+        return RunReport("error", error.problem, error.line, machine.time(), interpreter.statements)
     if result.abort is not None:
-        report = RunReport(
+        return RunReport(
             "abort", result.abort.message, result.abort.line, result.time, result.statements
         )
-        return report, interpreter
     steps = context.spec.steps
     if not steps:
-        report = RunReport(
+        return RunReport(
             "success", "the program ran to its end", None, result.time, result.statements
         )
-        return report, interpreter
     # Every step's pin must stand seated in its hole at the end (a sequence: each one named).
     verdicts = [
         machine.goal(context.graph.resolve(s.pin), context.graph.resolve(s.hole)) for s in steps
@@ -235,7 +239,7 @@ def run_machine(context: ReplayContext, machine: ReplayMachine) -> tuple[RunRepo
         ),
         None,
     )
-    return RunReport(outcome, why, None, result.time, result.statements, unmet=unmet), interpreter
+    return RunReport(outcome, why, None, result.time, result.statements, unmet=unmet)
 
 
 def run_world(context: ReplayContext, world: TrueWorld, hand_errors: HandErrors) -> RunReport:
@@ -246,11 +250,6 @@ def run_world(context: ReplayContext, world: TrueWorld, hand_errors: HandErrors)
 def run_nominal(context: ReplayContext) -> RunReport:
     """The run in the believed world (no errors anywhere)."""
     return run_world(context, nominal_world(context.graph), HandErrors.none())
-
-
-def trial_seed(seed: int, index: int) -> np.random.SeedSequence:
-    """The seed sequence of trial ``index``: child ``index`` of ``SeedSequence(seed)``."""
-    return np.random.SeedSequence(seed, spawn_key=(index,))
 
 
 def trial_world(context: ReplayContext, seed: int, index: int) -> tuple[TrueWorld, HandErrors]:
@@ -301,8 +300,8 @@ class TrialRecord:
     """One Monte Carlo trial, for diagnosis: its index, seed, sampled errors and its run.
 
     ``errors`` maps every perturbed frame to the error parameters trial ``index`` drew for it
-    [m, rad] (:func:`trial_errors`; the hand's positioning errors, drawn per motion target,
-    are not listed); ``run`` is the trial's report.
+    [m, rad] (:func:`trial_errors`); ``run`` is the trial's report, with the hand's
+    positioning error at each target (``run.hand_errors``, drawn per motion target).
     """
 
     index: int
@@ -314,9 +313,16 @@ class TrialRecord:
         """The record as JSON (SI units).
 
         ``{"index", "seed", "errors", "outcome", "line", "message", "time", "statements",
-        "violations"}``.
+        "violations", "hand_errors"}``; ``hand_errors`` lists ``{"line", "x", …, "rz"}`` per
+        target, in the order the run moved.
         """
-        return {"index": self.index, "seed": self.seed, "errors": self.errors, **self.run.to_json()}
+        return {
+            "index": self.index,
+            "seed": self.seed,
+            "errors": self.errors,
+            **self.run.to_json(),
+            "hand_errors": [draw.to_json() for draw in self.run.hand_errors],
+        }
 
 
 TrialSink = Callable[[TrialRecord], None]

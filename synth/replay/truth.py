@@ -51,6 +51,7 @@ from synth.models.graph import AttributeGraph
 from synth.models.spec import WORLD
 from synth.models.uncertainty import Uncertainty
 from synth.replay.located import located_objects
+from synth.replay.report import HandDraw
 
 __all__ = [
     "HandErrors",
@@ -200,6 +201,8 @@ class HandErrors:
         self._batch = np.zeros((0, len(self._names)))
         self.drawn = 0
         """Number of errors drawn so far."""
+        self.draws: list[HandDraw] = []
+        """The errors drawn so far, each with its motion's AL line (none for the exact stream)."""
 
     @classmethod
     def none(cls) -> HandErrors:
@@ -211,8 +214,13 @@ class HandErrors:
         """True when every error is the identity."""
         return self._space is None
 
-    def next(self) -> pin.SE3:
-        """The error of the next hand target: E = transl ∘ rot(x̂) ∘ rot(ŷ) ∘ rot(ẑ)."""
+    def next(self, line: int | None = None, target: int = 0) -> pin.SE3:
+        """The error of the next hand target: E = transl ∘ rot(x̂) ∘ rot(ŷ) ∘ rot(ẑ).
+
+        ``line``, ``target``: the AL line of the motion the target belongs to and its place
+        among the motion's targets, kept with the draw (:attr:`draws`) so a trial's report can
+        say which motion drew which error.
+        """
         self.drawn += 1
         if self._space is None:
             return pin.SE3.Identity()
@@ -220,4 +228,9 @@ class HandErrors:
             assert self._rng is not None
             self._batch = self._space.sample(self._rng, _HAND_BATCH)
         v, self._batch = self._batch[0], self._batch[1:]
+        self.draws.append(
+            HandDraw(
+                line, target, tuple((n, float(x)) for n, x in zip(self._names, v, strict=True))
+            )
+        )
         return link_error(self._names, v)
