@@ -196,6 +196,8 @@ def test_bad_spec_names_field_and_line(label: str, text: str, path: str, line: i
         assert info.value.detail.startswith("'w' is not an axis")
     if label == "equality constraint":
         assert info.value.detail.startswith("min equals max")
+    if label == "bad coefficient kind":
+        assert info.value.detail.startswith("term rz is an angle but the bound is a length")
     if label == "blank name":
         assert info.value.detail == "a task needs a name (it was blank)"
     if label == "two-line name":

@@ -152,8 +152,8 @@ def _coefficient_si(param: str, coefficient: Any, kind: Literal["length", "angle
             raise ValueError(f"coefficient of {param} is not finite")
         if param_kind != kind:
             raise ValueError(
-                f"term {param} is a {param_kind} but the bound is a {kind}; give its coefficient "
-                f"a unit, e.g. '1 cm/deg'"
+                f"term {param} is {_a(param_kind)} but the bound is {_a(kind)}; give its "
+                f"coefficient a unit, e.g. '1 cm/deg'"
             )
         return value
     q = read_quantity(coefficient)
@@ -165,8 +165,13 @@ def _coefficient_si(param: str, coefficient: Any, kind: Literal["length", "angle
     if param_kind == "length" and kind == "angle" and q.dimensionality == 1 / length_dim:
         return si_magnitude(q, "rad/m", coefficient)
     raise ValueError(
-        f"coefficient {coefficient!r} of {param} does not turn a {param_kind} into a {kind}"
+        f"coefficient {coefficient!r} of {param} does not turn {_a(param_kind)} into {_a(kind)}"
     )
+
+
+def _a(kind: str) -> str:
+    """``a length``, ``an angle``: a bound's kind with its article."""
+    return f"an {kind}" if kind[0] in "aeiou" else f"a {kind}"
 
 
 Distribution = Literal["uniform", "normal"]

@@ -304,7 +304,7 @@ def centering_opening(
     if lo - bounds.axial < d_i - 1e-12:
         return (
             f"with the pin {100 * bounds.axial:.2f} cm off along its axis the fingers reach "
-            f"{100 * (d_i - lo + bounds.axial):.2f} cm below the start hole's plane "
+            f"{100 * (d_i - lo + bounds.axial):.2g} cm below the start hole's plane "
             "(seed §4.3.2 condition a)"
         )
     needed = pin_shape.diameter + 2 * bounds.closing
