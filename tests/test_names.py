@@ -20,6 +20,7 @@ from _paths import SEED_TASK
 from synth.al import interpreter as interpreter_module
 from synth.al.builtins import BUILTINS
 from synth.al.builtins import CONSTANTS as VALUE_CONSTANTS
+from synth.al.evaluation import SENSORS
 from synth.al.names import (
     ARM_NAMES,
     CONSTANTS,
@@ -110,7 +111,7 @@ def refusal(data: dict[str, Any]) -> SpecError:
 
 def test_reserved_covers_every_name_the_interpreter_and_parser_define() -> None:
     interpreted = set(VALUE_CONSTANTS) | set(BUILTINS) | {"OPENING", "ARRIVAL", "DURATION"}
-    interpreted |= set(interpreter_module._SENSORS) | set(interpreter_module.HAND_NAMES)
+    interpreted |= set(SENSORS) | set(interpreter_module.HAND_NAMES)
     assert interpreted - RESERVED == set()
     assert set(grammar_keywords()) - RESERVED == set()
     assert set(DOCUMENTED_PREDECLARED) <= RESERVED

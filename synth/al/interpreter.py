@@ -7,7 +7,9 @@ It never looks at a true world itself.
 Each statement and expression node type has one method, dispatched by node type. Each method
 visits its children explicitly, because loops, branches and monitors decide what runs and when
 (the ``lark.visitors.Interpreter`` style, applied to the dataclass AST of
-:mod:`synth.al.ast`).
+:mod:`synth.al.ast`). This module runs the statements; the expressions' methods are
+:mod:`synth.al.evaluation`'s and the motion statements' :mod:`synth.al.motion_statements`'s,
+mix-ins of :class:`Interpreter` that share one process state (:mod:`synth.al.process`).
 
 Semantics, with the seed's lines (S:n) and seed-al-subset.md sections:
 
@@ -98,19 +100,18 @@ program raises :class:`~synth.exceptions.ALRuntimeError` with the AL line and co
 from __future__ import annotations
 
 import contextlib
-import itertools
 import math
 import time
 import weakref
 from collections.abc import Callable, Generator, Iterator, Sequence
 from dataclasses import dataclass
-from typing import Any, cast
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
 from synth.al import ast
-from synth.al.builtins import CONSTANTS, call_builtin
+from synth.al.builtins import CONSTANTS
 from synth.al.frames import (
     Affixment,
     FrameError,
@@ -118,46 +119,22 @@ from synth.al.frames import (
     Variable,
     affix,
     propagate,
-    se3_of,
     set_pose,
     unlink,
 )
 from synth.al.machine import (
-    DurationConstraint,
-    DurationMonitor,
-    EventMonitor,
-    ForceConstraint,
-    ForceMonitor,
     Machine,
-    MonitorSpec,
-    MotionConstraint,
-    MotionResult,
-    OpeningMonitor,
-    Relation,
-    TorqueConstraint,
-    TorqueMonitor,
 )
+from synth.al.motion_statements import Motions
 from synth.al.names import ARM_NAMES, KEYWORDS
-from synth.al.timeline import duration_conflict
+from synth.al.process import Aborted, ALAbort, MotionState, ProcessContext
 from synth.al.values import (
-    FORCE,
-    LENGTH,
-    TIME,
-    TORQUE,
     Event,
-    Exponents,
-    OperandError,
     Pose,
     Scalar,
     Value,
-    Vector,
-    binary,
-    coerce,
-    compare,
     describe,
-    magnitude,
     type_name,
-    unary,
 )
 from synth.exceptions import ALRuntimeError
 
@@ -201,18 +178,6 @@ MAX_WALL_TIME = 20.0
 HAND_NAMES: tuple[str, ...] = ARM_NAMES
 """The blue arm's names (al-language.md §6): all denote its one hand frame and hand device."""
 
-_FLIP: dict[str, Relation] = {"<": ">", ">": "<", "≤": "≥", "≥": "≤", "=": "=", "≠": "≠"}
-_SENSORS = {"FORCE", "TORQUE"}
-
-
-@dataclass(frozen=True)
-class ALAbort:
-    """The program ended with ``ABORT(...)``: its message and the AL line of the statement."""
-
-    message: str
-    line: int
-    column: int = 0
-
 
 @dataclass(frozen=True)
 class RunResult:
@@ -232,39 +197,11 @@ class RunResult:
         return self.abort is None
 
 
-class _Aborted(Exception):
-    """Internal: unwinds the interpreter after ``ABORT``; :meth:`Interpreter.run` catches it."""
-
-    def __init__(self, abort: ALAbort) -> None:
-        super().__init__(abort.message)
-        self.abort = abort
-
-
-# --------------------------------------------------------------------------------------------
-# A process's state
-
-
-@dataclass
-class _MotionState:
-    """One motion statement in progress, as its monitor handlers see it."""
-
-    stopped: bool = False
-    finished: bool = False
-
-
-@dataclass(frozen=True)
-class _Context:
-    """What a process carries: its innermost scope, and the motion whose handler it runs."""
-
-    scope: Scope
-    motion: _MotionState | None = None
-
-
 # --------------------------------------------------------------------------------------------
 # The interpreter
 
 
-class Interpreter:
+class Interpreter(Motions):
     """Executes AL programs on ``machine``; one instance holds one program's world model.
 
     ``hand_names`` are the names of the arm's hand (all one frame and one device).
@@ -300,7 +237,7 @@ class Interpreter:
         self._budget = max_statements
         self._signals = 0
         self._blocked: ast.Wait | None = None
-        self._active: _MotionState | None = None
+        self._active: MotionState | None = None
         self._sync_hand(machine.hand_pose())
 
     # ---- public: binding and inspection
@@ -368,12 +305,12 @@ class Interpreter:
         self._budget = start + self.max_statements
         self._time_limit = self.machine.time() + self.max_time
         self._wall_limit = time.monotonic() + self.max_wall_time
-        context = _Context(self._global)
+        context = ProcessContext(self._global)
         steps = self._sequence(program.body, context, declare_in=self._global)
         try:
             for _ in steps:
                 self._deadlock()
-        except _Aborted as aborted:
+        except Aborted as aborted:
             return RunResult(aborted.abort, self._statements - start, self.machine.time())
         finally:
             steps.close()
@@ -402,7 +339,7 @@ class Interpreter:
     # ---- statements
 
     def _sequence(
-        self, body: Sequence[ast.Stmt], cx: _Context, *, declare_in: Scope | None = None
+        self, body: Sequence[ast.Stmt], cx: ProcessContext, *, declare_in: Scope | None = None
     ) -> Generator[None, None, None]:
         if declare_in is not None:
             for statement in body:
@@ -411,7 +348,7 @@ class Interpreter:
         for statement in body:
             yield from self._exec(statement, cx)
 
-    def _exec(self, statement: ast.Stmt, cx: _Context) -> Generator[None, None, None]:
+    def _exec(self, statement: ast.Stmt, cx: ProcessContext) -> Generator[None, None, None]:
         self._statements += 1
         if self._statements > self._budget:
             raise self._error(
@@ -433,14 +370,14 @@ class Interpreter:
             raise self._error(statement, f"cannot execute {type(statement).__name__}")
         yield from method(self, statement, cx)
 
-    def _block(self, s: ast.Block, cx: _Context) -> Iterator[None]:
+    def _block(self, s: ast.Block, cx: ProcessContext) -> Iterator[None]:
         scope = Scope(cx.scope, s.name or "<block>")
         try:
-            yield from self._sequence(s.body, _Context(scope, cx.motion), declare_in=scope)
+            yield from self._sequence(s.body, ProcessContext(scope, cx.motion), declare_in=scope)
         finally:
             self._release(scope)
 
-    def _cobegin(self, s: ast.Cobegin, cx: _Context) -> Iterator[None]:
+    def _cobegin(self, s: ast.Cobegin, cx: ProcessContext) -> Iterator[None]:
         for statement in s.body:
             if isinstance(statement, ast.Declaration):
                 self._declare(statement, cx.scope)
@@ -464,7 +401,7 @@ class Interpreter:
             for branch in live:
                 branch.close()
 
-    def _declaration(self, s: ast.Declaration, cx: _Context) -> Iterator[None]:
+    def _declaration(self, s: ast.Declaration, cx: ProcessContext) -> Iterator[None]:
         return iter(())  # made when the block was entered
 
     def _declare(self, s: ast.Declaration, scope: Scope) -> None:
@@ -500,21 +437,21 @@ class Interpreter:
             for child in list(variable.children):
                 unlink(child)
 
-    def _assign(self, s: ast.Assign, cx: _Context) -> Iterator[None]:
+    def _assign(self, s: ast.Assign, cx: ProcessContext) -> Iterator[None]:
         self._store(s.target, self._eval(s.value, cx), cx)
         return iter(())
 
-    def _if(self, s: ast.If, cx: _Context) -> Iterator[None]:
+    def _if(self, s: ast.If, cx: ProcessContext) -> Iterator[None]:
         if self._condition(s.condition, cx):
             yield from self._exec(s.then, cx)
         elif s.orelse is not None:
             yield from self._exec(s.orelse, cx)
 
-    def _while(self, s: ast.While, cx: _Context) -> Iterator[None]:
+    def _while(self, s: ast.While, cx: ProcessContext) -> Iterator[None]:
         while self._condition(s.condition, cx):
             yield from self._exec(s.body, cx)
 
-    def _for(self, s: ast.For, cx: _Context) -> Iterator[None]:
+    def _for(self, s: ast.For, cx: ProcessContext) -> Iterator[None]:
         # ALGOL 60 report 4.6.4.2: V := A; L1: if (V-C)*sign(B) > 0 goto done; S; V := V+B; goto L1
         self._store(s.variable, self._scalar(s.start, cx, "the FOR start"), cx)
         while True:
@@ -530,35 +467,29 @@ class Interpreter:
             current = self._counter(s, cx)
             self._store(s.variable, self._arithmetic(s, "+", current, step), cx)
 
-    def _arithmetic(self, node: ast.Node, op: str, left: Value, right: Value) -> Value:
-        try:
-            return binary(op, left, right)
-        except OperandError as problem:
-            raise self._error(node, str(problem)) from None
-
-    def _counter(self, s: ast.For, cx: _Context) -> Scalar:
+    def _counter(self, s: ast.For, cx: ProcessContext) -> Scalar:
         value = self._read(s.variable, cx)
         if not isinstance(value, Scalar):
             raise self._error(s.variable, f"the FOR variable holds {type_name(value)}")
         return value
 
-    def _signal(self, s: ast.Signal, cx: _Context) -> Iterator[None]:
+    def _signal(self, s: ast.Signal, cx: ProcessContext) -> Iterator[None]:
         self._event(s.event, cx).count += 1
         self._signals += 1
         return iter(())
 
-    def _wait(self, s: ast.Wait, cx: _Context) -> Iterator[None]:
+    def _wait(self, s: ast.Wait, cx: ProcessContext) -> Iterator[None]:
         event = self._event(s.event, cx)
         while event.count == 0:
             self._blocked = s
             yield
         event.count -= 1
 
-    def _abort(self, s: ast.Abort, cx: _Context) -> Iterator[None]:
+    def _abort(self, s: ast.Abort, cx: ProcessContext) -> Iterator[None]:
         message = "".join(describe(self._eval(a, cx)) for a in s.args)
-        raise _Aborted(ALAbort(message, s.line, s.column))
+        raise Aborted(ALAbort(message, s.line, s.column))
 
-    def _stop(self, s: ast.Stop, cx: _Context) -> Iterator[None]:
+    def _stop(self, s: ast.Stop, cx: ProcessContext) -> Iterator[None]:
         motion = cx.motion
         if motion is None:
             raise self._error(s, "STOP outside a monitor body (ON ... DO STOP)")
@@ -571,7 +502,7 @@ class Interpreter:
 
     # ---- affixment statements
 
-    def _affix_stmt(self, s: ast.Affix, cx: _Context) -> Iterator[None]:
+    def _affix_stmt(self, s: ast.Affix, cx: ProcessContext) -> Iterator[None]:
         child = self._frame_variable(s.frame, cx)
         parent = self._frame_variable(s.parent, cx)
         relation = None
@@ -584,7 +515,7 @@ class Interpreter:
             affix(child, parent, relation, s.rigid)
         return iter(())
 
-    def _unfix(self, s: ast.Unfix, cx: _Context) -> Iterator[None]:
+    def _unfix(self, s: ast.Unfix, cx: ProcessContext) -> Iterator[None]:
         a = self._frame_variable(s.frame, cx)
         b = self._frame_variable(s.parent, cx)
         if a.link is not None and a.link.parent is b:
@@ -595,7 +526,7 @@ class Interpreter:
             raise self._error(s, f"{a.name} is not affixed to {b.name}")
         return iter(())
 
-    def _frame_variable(self, name: ast.Name, cx: _Context) -> Variable:
+    def _frame_variable(self, name: ast.Name, cx: ProcessContext) -> Variable:
         variable = cx.scope.lookup(name.name)
         if variable is None:
             self._check_declarable(name.name, name)
@@ -617,395 +548,12 @@ class Interpreter:
         self._hand.value = Pose(pose, "frame")
         propagate(self._hand, frozenset())
 
-    # ---- motion statements
-
-    def _move(self, s: ast.Move, cx: _Context) -> Iterator[None]:
-        moved = cx.scope.lookup(s.frame.name)
-        if moved is None:
-            raise self._error(s.frame, f"unknown name {s.frame.name}: MOVE needs a frame")
-        if moved.type not in ("FRAME", "TRANS"):
-            raise self._error(s.frame, f"MOVE needs a frame, and {s.frame.name} is a {moved.type}")
-        hand_from_frame = self._hand_from(moved, s)
-        points: list[tuple[ast.Expr, Value]] = [(s.destination, self._eval(s.destination, cx))]
-        points += [(p, self._eval(p, cx)) for p in s.via_points]
-        poses: list[pin.SE3] = []
-        for expr, value in points:
-            if not isinstance(value, Pose):
-                raise self._error(expr, f"a motion goes to a frame, not to {type_name(value)}")
-            poses.append(value.se3)
-        frame_from_hand = hand_from_frame.inverse()
-        targets = [p * frame_from_hand for p in (*poses[1:], poses[0])]
-        constraints = self._constraints(s, cx)
-        monitors, handlers, arrivals = self._monitors(s, cx)
-        yield from self._motion(
-            s,
-            cx,
-            lambda: self.machine.move(targets, monitors, constraints, s.line),
-            handlers,
-            arrivals,
-        )
-
-    def _hand_from(self, moved: Variable, s: ast.Move) -> pin.SE3:
-        if moved.hand:
-            return pin.SE3.Identity()
-        node: Variable | None = moved
-        while node is not None and not node.hand:
-            node = node.link.parent if node.link is not None else None
-        if node is None:
-            raise self._error(
-                s.frame,
-                f"cannot move {moved.name}: it is not affixed to the hand "
-                f"(AFFIX {moved.name} TO {self.hand_names[0]} first)",
-            )
-        if moved.pose is None:
-            raise self._error(s.frame, f"{moved.name} has no value")
-        return se3_of(self._hand.pose).inverse() * se3_of(moved.pose)
-
-    def _device(self, name: ast.Name) -> None:
-        if name.name not in self.hand_names:
-            shown = ", ".join(self.hand_names)
-            raise self._error(name, f"{name.name} is not a hand (the hand is {shown})")
-
-    def _open(self, s: ast.Open, cx: _Context) -> Iterator[None]:
-        self._device(s.device)
-        width = self._dimensioned(s.width, cx, LENGTH, "an opening")
-        constraints = self._constraints(s, cx)
-        monitors, handlers, arrivals = self._monitors(s, cx)
-        start = lambda: self.machine.open_hand(width, monitors, constraints, s.line)  # noqa: E731
-        yield from self._motion(s, cx, start, handlers, arrivals)
-
-    def _close(self, s: ast.Close, cx: _Context) -> Iterator[None]:
-        self._device(s.device)
-        width = None
-        if s.width is not None:
-            width = self._dimensioned(s.width, cx, LENGTH, "an opening")
-        constraints = self._constraints(s, cx)
-        monitors, handlers, arrivals = self._monitors(s, cx)
-        start = lambda: self.machine.close_hand(width, monitors, constraints, s.line)  # noqa: E731
-        yield from self._motion(s, cx, start, handlers, arrivals)
-
-    def _center(self, s: ast.Center, cx: _Context) -> Iterator[None]:
-        self._device(s.device)
-        constraints = self._constraints(s, cx)
-        monitors, handlers, arrivals = self._monitors(s, cx)
-        start = lambda: self.machine.center(monitors, constraints, s.line)  # noqa: E731
-        yield from self._motion(s, cx, start, handlers, arrivals)
-
-    def _motion(
-        self,
-        s: ast.Stmt,
-        cx: _Context,
-        start: Callable[[], MotionResult],
-        handlers: list[ast.Stmt],
-        arrivals: list[ast.Stmt],
-    ) -> Iterator[None]:
-        if self._active is not None:
-            raise self._error(
-                s, "a motion statement in a monitor body needs STOP first: the arm is still moving"
-            )
-        state = _MotionState()
-        result = start()
-        self._active = state
-        reported: set[int] = set()
-        try:
-            while True:
-                self._sync_hand(result.hand_pose)
-                if result.fired is None:
-                    break
-                index = result.fired
-                if index in reported or not 0 <= index < len(handlers):
-                    raise RuntimeError(
-                        f"the machine reported monitor {index} wrongly (line {s.line})"
-                    )
-                reported.add(index)
-                yield from self._exec(handlers[index], _Context(cx.scope, state))
-                if state.stopped:
-                    break
-                try:
-                    result = self.machine.resume()
-                except Exception:
-                    self._active = None  # the machine ended the motion by failing
-                    raise
-        except _Aborted:
-            self._release_machine()
-            raise
-        self._active = None
-        arrived = result.arrived and not state.stopped
-        state.finished = True
-        if arrived:
-            for body in arrivals:
-                yield from self._exec(body, _Context(cx.scope, state))
-
-    def _monitors(
-        self, s: ast.Move | ast.Open | ast.Close | ast.Center, cx: _Context
-    ) -> tuple[list[MonitorSpec], list[ast.Stmt], list[ast.Stmt]]:
-        monitors: list[MonitorSpec] = []
-        handlers: list[ast.Stmt] = []
-        arrivals: list[ast.Stmt] = []
-        for on in s.monitors:
-            condition = on.condition
-            if isinstance(condition, ast.Name) and condition.name == "ARRIVAL":
-                arrivals.append(on.body)
-                continue
-            monitors.append(self._monitor(condition, cx, on.line))
-            handlers.append(on.body)
-        return monitors, handlers, arrivals
-
-    def _monitor(self, condition: ast.Expr, cx: _Context, line: int) -> MonitorSpec:
-        if isinstance(condition, ast.Name):
-            self._event(condition, cx)
-            return EventMonitor(condition.name, line)
-        if isinstance(condition, ast.Compare) and len(condition.ops) == 1:
-            (left, right), relation = condition.operands, _relation(condition.ops[0])
-            if not _is_sensor(left) and _is_sensor(right):
-                left, right, relation = right, left, _FLIP[relation]
-            if isinstance(left, ast.Call) and left.func.name in _SENSORS:
-                direction = self._direction(left, cx)
-                if left.func.name == "FORCE":
-                    threshold = self._dimensioned(right, cx, FORCE, "a force threshold")
-                    return ForceMonitor(direction, relation, threshold, line)
-                threshold = self._dimensioned(right, cx, TORQUE, "a torque threshold")
-                return TorqueMonitor(direction, relation, threshold, line)
-            if isinstance(left, ast.Name) and left.name == "OPENING":
-                threshold = self._dimensioned(right, cx, LENGTH, "an opening threshold")
-                return OpeningMonitor(relation, threshold, line)
-            if isinstance(left, ast.Name) and left.name == "DURATION":
-                threshold = self._dimensioned(right, cx, TIME, "a duration")
-                return DurationMonitor(relation, threshold, line)
-        raise self._error(
-            condition,
-            "a monitor watches FORCE(v), TORQUE(v), OPENING or DURATION against a value, "
-            "an event, or ARRIVAL",
-        )
-
-    def _constraints(
-        self, s: ast.Move | ast.Open | ast.Close | ast.Center, cx: _Context
-    ) -> list[MotionConstraint]:
-        out: list[MotionConstraint] = []
-        written: list[ast.Expr] = []
-        targets = 0
-        previous: ast.Clause | None = None
-        for clause in s.clauses:
-            if isinstance(clause, ast.ViaClause):
-                targets += len(clause.points)
-            elif isinstance(clause, ast.WithClause):
-                segment = targets - 1 if isinstance(previous, ast.ViaClause) else None
-                out += [self._constraint(c, cx, segment) for c in clause.conditions]
-                written += clause.conditions
-            previous = clause
-        conflict = duration_conflict(out)
-        if conflict is not None:
-            bound, later = conflict
-            raise self._error(
-                next(w for w, c in zip(written, out, strict=True) if c is later),
-                f"DURATION {later.relation} {later.seconds:g} s contradicts DURATION "
-                f"{bound.relation} {bound.seconds:g} s (line {bound.line}) for the same motion: "
-                "no time meets both",
-            )
-        return out
-
-    def _constraint(self, c: ast.Expr, cx: _Context, segment: int | None) -> MotionConstraint:
-        if isinstance(c, ast.Compare) and len(c.ops) == 1:
-            (left, right), relation = c.operands, _relation(c.ops[0])
-            if not _is_sensor(left) and _is_sensor(right):
-                left, right, relation = right, left, _FLIP[relation]
-            if isinstance(left, ast.Call) and left.func.name in _SENSORS and relation == "=":
-                direction = self._direction(left, cx)
-                if left.func.name == "FORCE":
-                    value = self._dimensioned(right, cx, FORCE, "a force")
-                    return ForceConstraint(direction, value, segment, c.line)
-                value = self._dimensioned(right, cx, TORQUE, "a torque")
-                return TorqueConstraint(direction, value, segment, c.line)
-            if isinstance(left, ast.Name) and left.name == "DURATION":
-                seconds = self._dimensioned(right, cx, TIME, "a duration")
-                if relation in ("=", "<", "≤") and not seconds > 0.0:
-                    # the timeline would run the motion in no time or backwards
-                    raise self._error(
-                        c, f"DURATION {relation} {seconds:g} s: a motion takes a positive time"
-                    )
-                return DurationConstraint(relation, seconds, segment, c.line)
-        raise self._error(c, "a WITH condition is FORCE(v) = f, TORQUE(v) = t or DURATION rel t")
-
-    def _direction(self, call: ast.Call, cx: _Context) -> tuple[float, float, float]:
-        """The world unit direction of FORCE(v)/TORQUE(v); ``frame*v`` uses the rotation only."""
-        if len(call.args) != 1:
-            raise self._error(call, f"{call.func.name} takes one direction vector")
-        (arg,) = call.args
-        value: Value
-        if isinstance(arg, ast.BinOp) and arg.op == "*":
-            left, right = self._eval(arg.left, cx), self._eval(arg.right, cx)
-            if isinstance(left, Pose) and isinstance(right, Vector):
-                value = Vector(left.se3.rotation @ right.value, right.dim)
-            else:
-                value = self._apply(arg, lambda: binary("*", left, right))
-        else:
-            value = self._eval(arg, cx)
-        if not isinstance(value, Vector):
-            raise self._error(arg, f"{call.func.name} needs a direction vector")
-        norm = float(np.linalg.norm(value.value))
-        if norm < 1e-12:
-            raise self._error(arg, f"{call.func.name} needs a non-zero direction")
-        x, y, z = (float(v) for v in value.value / norm)
-        return (x, y, z)
-
-    # ---- expressions
-
-    def _eval(self, e: ast.Expr, cx: _Context) -> Value:
-        method = _EXPRESSIONS.get(type(e))
-        if method is None:
-            raise self._error(e, f"cannot evaluate {type(e).__name__}")
-        return method(self, e, cx)
-
-    def _apply(self, node: ast.Node, fn: Callable[[], Any]) -> Any:
-        try:
-            return fn()
-        except OperandError as problem:
-            raise self._error(node, str(problem)) from None
-
-    def _number(self, e: ast.Number, cx: _Context) -> Value:
-        return Scalar(e.value)
-
-    def _string(self, e: ast.String, cx: _Context) -> Value:
-        return e.value
-
-    def _name(self, e: ast.Name, cx: _Context) -> Value:
-        return self._read(e, cx)
-
-    def _read(self, e: ast.Name, cx: _Context) -> Value:
-        variable = cx.scope.lookup(e.name)
-        if variable is not None:
-            if variable.value is None:
-                raise self._error(e, f"{e.name} has no value yet")
-            return variable.value
-        constant = CONSTANTS.get(e.name)
-        if constant is not None:
-            return constant
-        if e.name == "OPENING":
-            return Scalar(self.machine.opening(), LENGTH)
-        if e.name in ("ARRIVAL", "DURATION"):
-            raise self._error(e, f"{e.name} is only meaningful in an ON or WITH clause")
-        raise self._error(e, f"unknown name {e.name}")
-
-    def _call(self, e: ast.Call, cx: _Context) -> Value:
-        name = e.func.name
-        if name in _SENSORS:
-            direction = np.array(self._direction(e, cx))
-            if name == "FORCE":
-                return Scalar(self.machine.force(direction), FORCE)
-            return Scalar(self.machine.torque(direction), TORQUE)
-        args = [self._eval(a, cx) for a in e.args]
-        return self._apply(e, lambda: call_builtin(name, args))  # type: ignore[no-any-return]
-
-    def _unary(self, e: ast.UnaryOp, cx: _Context) -> Value:
-        operand = self._eval(e.operand, cx)
-        return self._apply(e, lambda: unary(e.op, operand))  # type: ignore[no-any-return]
-
-    def _binary(self, e: ast.BinOp, cx: _Context) -> Value:
-        left = self._eval(e.left, cx)
-        right = self._eval(e.right, cx)
-        return self._arithmetic(e, e.op, left, right)
-
-    def _compare(self, e: ast.Compare, cx: _Context) -> Value:
-        values = [self._eval(x, cx) for x in e.operands]
-        result = True
-        pairs = zip(itertools.pairwise(values), e.ops, e.conjuncts(), strict=True)
-        for (left, right), op, pair in pairs:
-            try:
-                held = compare(op, left, right)
-            except OperandError as problem:
-                raise self._error(pair, str(problem)) from None
-            result = result and held
-        return result
-
-    def _magnitude(self, e: ast.Magnitude, cx: _Context) -> Value:
-        operand = self._eval(e.operand, cx)
-        return self._apply(e, lambda: magnitude(operand))  # type: ignore[no-any-return]
-
-    def _assign_expr(self, e: ast.AssignExpr, cx: _Context) -> Value:
-        value = self._eval(e.value, cx)
-        self._store(e.target, value, cx)
-        return value
-
-    def _condition(self, e: ast.Expr, cx: _Context) -> bool:
-        value = self._eval(e, cx)
-        if not isinstance(value, bool):
-            raise self._error(e, f"a condition must be a boolean, not {type_name(value)}")
-        return value
-
-    def _scalar(self, e: ast.Expr, cx: _Context, what: str) -> Scalar:
-        value = self._eval(e, cx)
-        if not isinstance(value, Scalar):
-            raise self._error(e, f"{what} must be a scalar, not {type_name(value)}")
-        return value
-
-    def _dimensioned(self, e: ast.Expr, cx: _Context, dim: Exponents, what: str) -> float:
-        value = self._scalar(e, cx, what)
-        return self._apply(e, lambda: coerce(value, dim, what).value)  # type: ignore[no-any-return]
-
-    def _event(self, name: ast.Name, cx: _Context) -> Event:
-        variable = cx.scope.lookup(name.name)
-        if variable is None:
-            self._check_declarable(name.name, name)
-            variable = Variable(name.name, "EVENT", Event(name.name))
-            self._global.variables[name.name] = variable
-        if not isinstance(variable.value, Event):
-            raise self._error(name, f"{name.name} is a {variable.type.lower()}, not an event")
-        return variable.value
-
-    # ---- storing
-
-    def _store(self, target: ast.Name, value: Value, cx: _Context) -> None:
-        variable = cx.scope.lookup(target.name)
-        if variable is None:
-            self._check_declarable(target.name, target)
-            kind = _type_of(value)
-            if kind == "EVENT":
-                raise self._error(target, "an event cannot be assigned")
-            variable = Variable(target.name, kind)
-            self._global.variables[target.name] = variable
-        if variable.hand:
-            raise self._error(
-                target, f"{target.name} is the arm's sensed hand frame; move it with MOVE"
-            )
-        wanted = variable.type
-        if wanted in ("FRAME", "TRANS"):
-            if not isinstance(value, Pose):
-                raise self._error(
-                    target, f"cannot assign {type_name(value)} to {wanted.lower()} {target.name}"
-                )
-            with self._refused_at(target):
-                set_pose(variable, value.se3)
-            return
-        if _type_of(value) != wanted:
-            raise self._error(
-                target, f"cannot assign {type_name(value)} to {wanted.lower()} {target.name}"
-            )
-        variable.value = value
-
 
 # --------------------------------------------------------------------------------------------
-# Helpers and dispatch tables
+# Dispatch
 
 
-def _type_of(value: Value) -> str:
-    name = type_name(value)
-    return {"boolean": "BOOLEAN", "rot": "ROT"}.get(name, name.upper())
-
-
-def _relation(op: str) -> Relation:
-    if op not in _FLIP:
-        raise ValueError(f"unknown relation {op!r}")
-    return cast(Relation, op)
-
-
-def _is_sensor(e: ast.Expr) -> bool:
-    if isinstance(e, ast.Call):
-        return e.func.name in _SENSORS
-    return isinstance(e, ast.Name) and e.name in ("OPENING", "DURATION")
-
-
-_Statement = Callable[[Interpreter, Any, _Context], Iterator[None]]
-_Expression = Callable[[Interpreter, Any, _Context], Value]
+_Statement = Callable[[Interpreter, Any, ProcessContext], Iterator[None]]
 
 _STATEMENTS: dict[type, _Statement] = {
     ast.Block: Interpreter._block,
@@ -1025,18 +573,6 @@ _STATEMENTS: dict[type, _Statement] = {
     ast.Wait: Interpreter._wait,
     ast.Abort: Interpreter._abort,
     ast.Stop: Interpreter._stop,
-}
-
-_EXPRESSIONS: dict[type, _Expression] = {
-    ast.Number: Interpreter._number,
-    ast.String: Interpreter._string,
-    ast.Name: Interpreter._name,
-    ast.Call: Interpreter._call,
-    ast.UnaryOp: Interpreter._unary,
-    ast.BinOp: Interpreter._binary,
-    ast.Compare: Interpreter._compare,
-    ast.Magnitude: Interpreter._magnitude,
-    ast.AssignExpr: Interpreter._assign_expr,
 }
 
 
