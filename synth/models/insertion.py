@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal, Protocol
 
@@ -46,7 +47,10 @@ class InsertionParameters:
     parts themselves (:mod:`synth.replay.capture`), never from these formulas. ``friction``
     [1] is μ and ``wedge_tilt`` [rad] Whitney's θ_wedge = c/μ, the bound on ``dtheta_ok``;
     ``notes`` are remarks for the plan (a given value clipped). ``lead_height`` [m] is the
-    entering end's taper plus the chamfer's width, over which the lead is taken up.
+    entering end's taper plus the chamfer's width, over which the lead is taken up. ``seat``
+    [m] is the derived d_f, the depth at which the pin bottoms out, whatever d_f the task
+    gives; ``seat_by`` names what stops it (``the hole's depth`` or ``the pin's length less
+    its tip taper``).
     """
 
     pin: str
@@ -61,6 +65,8 @@ class InsertionParameters:
     lead: float
     friction: float
     wedge_tilt: float
+    seat: float
+    seat_by: str
     notes: tuple[str, ...] = ()
     lead_height: float = 0.0
 
@@ -75,8 +81,9 @@ def derive(graph: AttributeGraph, spec: InsertionSpec) -> InsertionParameters:
     head_first = spec.direction == "antiparallel"
     r_end = pin_shape.diameter / 2 if head_first else pin_shape.tip_radius
     taper = 0.0 if head_first else pin_shape.tip_taper_length
+    reach = pin_shape.length - pin_shape.tip_taper_length
     derived = {
-        "d_f": min(hole_shape.depth, pin_shape.length - pin_shape.tip_taper_length),
+        "d_f": min(hole_shape.depth, reach),
         "d_s": 0.0,
         "dr_ok": hole_shape.chamfer_width + max(r_hole - r_end, 0.0),
     }
@@ -117,6 +124,10 @@ def derive(graph: AttributeGraph, spec: InsertionSpec) -> InsertionParameters:
         lead=derived["dr_ok"],
         friction=friction,
         wedge_tilt=wedge,
+        seat=derived["d_f"],
+        seat_by="the hole's depth"
+        if hole_shape.depth <= reach
+        else ("the pin's length less its tip taper"),
         notes=tuple(notes),
         lead_height=lead_height,
         **values,
@@ -164,15 +175,41 @@ def at_lead(params: InsertionParameters, why: str) -> InsertionParameters:
     )
 
 
-def refuse_unprovable(params: InsertionParameters, pin_al: str, hole_al: str) -> None:
-    """Raise :class:`SpecError` at ``insertion.direction`` for a turned-over (antiparallel) pin.
+def refuse_unprovable(
+    params: InsertionParameters,
+    pin_al: str,
+    hole_al: str,
+    reading_floor: float,
+    line_of: Callable[[str], int | None] = lambda field: None,
+) -> None:
+    """Raise :class:`SpecError` for a task no program can be proven on.
 
-    Such a program cannot be proven: the replay captures, seats and checks a pin by its tapered
-    tip only, never by its head; and the emitted guard ``FORCE(ORIENT(pin)*ZHAT)`` is evaluated
-    when its motion starts (AL evaluates a motion's expressions then, like its destinations),
-    so in every search move, which starts with the pin already turned over, it points into the
-    hole and never feels the pin arrive.
+    ``line_of`` gives a field's YAML line, for the error.
+
+    At ``insertion.d_f``, a given d_f shallower than where the pin bottoms out (``seat``) by
+    more than ``reading_floor`` [m], the least margin the success test keeps over a seated
+    pin's reading (:func:`~synth.strategies.refine.success_threshold`): the replay pushes the
+    pin to the bottom, where it reads ``seat − d_f`` deeper than the program expects, and a
+    pin that missed reads ``d_f − d_s`` off; the test takes the seated pin for a miss once the
+    first exceeds the margin, so every candidate's nominal run aborts.
+
+    At ``insertion.direction``, a turned-over (antiparallel) pin: the replay captures, seats and
+    checks a pin by its tapered tip only, never by its head; and the emitted guard
+    ``FORCE(ORIENT(pin)*ZHAT)`` is evaluated when its motion starts (AL evaluates a motion's
+    expressions then, like its destinations), so in every search move, which starts with the
+    pin already turned over, it points into the hole and never feels the pin arrive.
     """
+    short = params.seat - params.d_f
+    if params.source["d_f"] == "given" and short > reading_floor:
+        raise SpecError(
+            "insertion.d_f",
+            f"d_f = {100 * params.d_f:.4g} cm is shallower than where {pin_al} seats in "
+            f"{hole_al}: {100 * params.seat:.4g} cm, {params.seat_by} (the pin goes in until it "
+            f"bottoms out); a seated pin would read {100 * short:.4g} cm off the program's "
+            f"success test, which allows {100 * reading_floor:.4g} cm above the depth error; "
+            f"give d_f = {100 * params.seat:.4g} cm or leave it out",
+            line_of("insertion.d_f"),
+        )
     if params.direction != "antiparallel":
         return
     raise SpecError(
@@ -181,4 +218,5 @@ def refuse_unprovable(params: InsertionParameters, pin_al: str, hole_al: str) ->
         "and the replay captures and seats a pin only by its tip while the search's force "
         f"guard FORCE(ORIENT({pin_al})*ZHAT) would point into the hole, so no program could "
         "be proven; insert it tip first (direction: parallel)",
+        line_of("insertion.direction"),
     )

@@ -253,7 +253,13 @@ def plan_context(
     assert spec.insertion is not None and spec.manipulator is not None
     opts = options or PlanOptions()
     insertion = derive(graph, spec.insertion)
-    refuse_unprovable(insertion, graph.al_names[insertion.pin], graph.al_names[insertion.hole])
+    refuse_unprovable(
+        insertion,
+        graph.al_names[insertion.pin],
+        graph.al_names[insertion.hole],
+        opts.reading_floor,
+        spec.line_of,
+    )
     assert insertion.start_hole is not None
     pin_shape = graph.nodes[insertion.pin].shape
     hole_shape = graph.nodes[insertion.hole].shape
