@@ -21,6 +21,7 @@ WaitQuery = Annotated[
     float,
     Query(
         ge=0,
+        allow_inf_nan=False,  # NaN compares false with everything: "not ≥ 0" would mislead
         description="seconds to wait for the job to finish before answering, at most the "
         "server's SYNTH_MAX_WAIT (30 s); 0: answer at once",
     ),

@@ -162,3 +162,27 @@ def test_the_seed_program_wedges_in_a_box_tilted_past_the_onset(degrees, outcome
     if outcome == "violation":
         assert report.message.startswith("wedged: PIN1 wedged in BH1: it entered tilted 2.50°")
         assert report.violations[0].kind == "wedged"
+
+
+@pytest.mark.parametrize(
+    ("pose", "field", "fault"),
+    [
+        # 0.5 cm up a 4.9 cm box, axis exactly along z: the mouth alone is named (the axis's
+        # floating-point angle, 1e-6°, was printed as a second fault)
+        ("{translation: [3.85 cm, 3.20 cm, 0.5 cm]}", "pose.translation", "its mouth is 0.5 cm up"),
+        (
+            "{translation: [3.85 cm, 3.20 cm, 4.90 cm], rotation: [{x: 5 deg}]}",
+            "pose.rotation",
+            "its axis 5° off z",
+        ),
+    ],
+)
+def test_a_hole_off_its_box_top_names_only_what_is_off(pose: str, field: str, fault: str) -> None:
+    text = SEED_TASK.read_text(encoding="utf-8")
+    seated = "pose: {translation: [3.85 cm, 3.20 cm, 4.90 cm]}      # T_bh, L2576"
+    assert seated in text
+    graph = AttributeGraph(parse_task(text.replace(seated, f"pose: {pose}")))
+    with pytest.raises(SpecError) as info:
+        WorkcellModel(graph).place(NominalPoses(graph))
+    assert info.value.path.endswith(field)
+    assert info.value.detail.endswith(f"along the box's z); {fault}")

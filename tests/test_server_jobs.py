@@ -269,3 +269,13 @@ def test_a_batch_past_the_clients_queue_refuses_the_rest_with_429(tmp_path: Any)
         assert all(
             small.get(i["location"]).json()["state"] in FINAL for i in answer.json()["items"][:2]
         )
+
+
+@pytest.mark.parametrize("wait", ["nan", "inf"])
+def test_a_wait_that_is_not_a_finite_number_is_422_saying_so(client: TestClient, wait: str) -> None:
+    # NaN compares false with everything: it was refused as "not ≥ 0", a negative number
+    body = problem(client.get(f"/v1/jobs/{'0' * 32}?wait={wait}"), 422)
+    errors = body["errors"]
+    assert isinstance(errors, list) and len(errors) == 1, errors
+    assert errors[0]["loc"] == ["query", "wait"]
+    assert errors[0]["msg"] == "Input should be a finite number", errors

@@ -308,13 +308,20 @@ def _seed_with(old: str, new: str) -> tuple[str, int]:
         ("  d_s: 0 cm", "  d_s: 1.8 cm", "insertion.d_s", "1.8 cm must be less than d_f = 1.71"),
         # the pin stands in RH1; BH2 is a hole of the box, 21 cm away
         ("  start_hole: RH1", "  start_hole: BH2", "insertion.start_hole", "does not stand in BH2"),
+        # and the message points at the pin's own frame (PIN1 is frames[9], placed against rh1)
+        (
+            "  start_hole: RH1",
+            "  start_hole: BH2",
+            "insertion.start_hole",
+            "name the hole it stands in, or place it in this one (frames[9], its pose against rh1)",
+        ),
         # RH1 (0.64 cm) leaves the 0.635 cm pin 0.0025 cm of radial play: an axis 0.1 cm off
         # puts the pin into the rack's wall, though its tip centre is inside the 0.32 cm mouth
         (
             "pose: {translation: [0 cm, 0 cm, -1.71 cm]}",
             "pose: {translation: [0.1 cm, 0 cm, -1.71 cm]}",
             "insertion.start_hole",
-            "axis 0.1 cm off the hole's, which leaves it 0.0025 cm of play",
+            "its axis 0.1 cm from the hole's, where the radial clearance allows 0.0025 cm",
         ),
         # a tip above the mouth stands on nothing: said as height, not as a negative depth
         (

@@ -255,18 +255,22 @@ def _check_start_hole(spec: TaskSpec, ins: InsertionSpec, fail: Any, where: Path
     wrong = []
     if lateral > max(play, 0.0) + 1e-6:
         wrong.append(
-            f"axis {100 * lateral:.3g} cm off the hole's, which leaves it "
-            f"{100 * max(play, 0.0):.3g} cm of play"
+            f"its axis {100 * lateral:.3g} cm from the hole's, where the radial clearance "
+            f"allows {100 * max(play, 0.0):.3g} cm"
         )
     if depth < -1e-6:
         wrong.append(f"tip {100 * -depth:.3g} cm above its mouth")
     elif depth > hole.depth + 1e-6:
         wrong.append(f"tip {100 * depth:.3g} cm deep in a hole {100 * hole.depth:.3g} cm deep")
     if wrong:
+        index = next(i for i, f in enumerate(spec.frames) if f.name == pin_name)
+        parent = spec.frames[index].parent
         fail(
             (*where, "start_hole"),
             f"pin {graph.al_names[pin_name]} does not stand in {graph.al_names[hole_name]} "
-            f"({'; '.join(wrong)}); start_hole names the hole the pin is taken out of",
+            f"({'; '.join(wrong)}); start_hole names the hole the pin is taken out of: name "
+            f"the hole it stands in, or place it in this one (frames[{index}], its pose "
+            f"against {parent})",
         )
 
 

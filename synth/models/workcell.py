@@ -287,12 +287,22 @@ class WorkcellModel:
             else:
                 field = ""
             if field:
+                # name only what is wrong: an axis within the tolerance is along z (its angle
+                # in floating point, 1e-6°, is not a second fault)
+                faults = []
+                if owner_shape is None or owner_shape.type != "box":
+                    kind = "no shape" if owner_shape is None else f"a {owner_shape.type}"
+                    faults.append(f"its part {graph.nodes[owner].al_name} is {kind}")
+                if abs(local.translation[2] - top) > _PLACEMENT_TOLERANCE:
+                    faults.append(f"its mouth is {100 * float(local.translation[2]):.4g} cm up")
+                if tilted:
+                    angle = math.degrees(math.acos(min(1.0, float(axis[2]))))
+                    faults.append(f"its axis {angle:.3g}° off z")
                 raise SpecError(
                     field,
                     f"hole {node.name!r}: the replay drills holes only into the top face of a box "
                     f"(mouth on the face, {100 * top:.4g} cm up the box's frame; axis along the "
-                    f"box's z); its mouth is {100 * float(local.translation[2]):.4g} cm up, "
-                    f"its axis {math.degrees(math.acos(min(1.0, float(axis[2])))):.3g}° off z",
+                    f"box's z); {' and '.join(faults)}",
                     graph.spec.line_of(field),
                 )
             x, y = (round(float(v), 12) for v in local.translation[:2])
