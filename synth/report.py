@@ -519,7 +519,7 @@ def trial_text(record: TrialRecord, *, every_hand_error: bool = True) -> str:
         lines.append(f"  {frame}: {_error_parts(values.items())}")
     draws = run.hand_errors
     if not every_hand_error and draws:
-        first = max(k for k, d in enumerate(draws) if d.target == 0)
+        first = max(k for k, d in enumerate(draws) if d.target == 1)
         earlier, draws = first, draws[first:]
         if earlier:
             lines.append(
@@ -527,7 +527,7 @@ def trial_text(record: TrialRecord, *, every_hand_error: bool = True) -> str:
             )
     for draw in draws:
         where = "" if draw.line is None else f"line {draw.line}, "
-        lines.append(f"  hand ({where}target {draw.target + 1}): {_error_parts(draw.values)}")
+        lines.append(f"  hand ({where}target {draw.target}): {_error_parts(draw.values)}")
     return "\n".join(lines)
 
 

@@ -56,7 +56,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from _paths import BOX_FIXTURE_TASK, SEED_TASK, TASKS
+from _paths import BOX_FIXTURE_TASK, DATA_TASKS, SEED_TASK, TASKS
 from scipy.optimize import brentq, minimize
 
 from synth.cli import main
@@ -521,6 +521,25 @@ def test_cli_errors_on_a_located_box(capsys: pytest.CaptureFixture[str]) -> None
     assert main(["errors", FIXTURE, "--from", "FIX1", "--to", "BOX1"]) == 2
     err = capsys.readouterr().err
     assert "contacts[0]" in err and "2 possible orientations" in err
+
+
+@pytest.mark.parametrize(
+    "command",
+    [["locate"], ["locate", "--json"], ["errors", "--from", "TB", "--to", "TRAY"]],
+    ids=["locate", "locate-json", "errors"],
+)
+def test_a_part_free_to_turn_is_refused_at_its_contact(
+    command: list[str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    # A tray inside_of a block's top and touching nothing else turns freely about the top's
+    # normal: W spans the circle, and no error block certifies a turn of 90° or more. The
+    # block's validator raised from inside derive_link: an internal error, exit 70.
+    task = str(DATA_TASKS / "located_free_to_turn.yaml")
+    assert main([command[0], task, *command[1:]]) == 2
+    err = capsys.readouterr().err
+    assert "internal error" not in err
+    assert "contacts[0]: these contacts leave 'tray' free to turn about the normal of " in err
+    assert "add a contact that fixes its orientation" in err
 
 
 def test_cli_locate_bad_input_exits_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

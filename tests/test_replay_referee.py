@@ -263,11 +263,12 @@ def test_one_trial_alone_is_the_trial_of_the_full_run(capsys: pytest.CaptureFixt
     for draw, row in zip(hand, drawn, strict=False):
         assert [draw[name] for name in block.names] == row.tolist()
     # Lines 28 (the grasp, with a VIA), 34 (the lift), 38 (the first attempt, with a VIA),
-    # then line 57's search moves, two targets each, the last of which aborts at line 60.
+    # then line 57's search moves, two targets each, the last of which aborts at line 60;
+    # targets count from 1 in the JSON as in the text ("hand (line 57, target 2)").
     motions = [(d["line"], d["target"]) for d in hand]
-    assert motions[:5] == [(28, 0), (28, 1), (34, 0), (38, 0), (38, 1)]
+    assert motions[:5] == [(28, 1), (28, 2), (34, 1), (38, 1), (38, 2)]
     searches = motions[5:]
-    assert searches == [(57, 0), (57, 1)] * (len(searches) // 2) and searches
+    assert searches == [(57, 1), (57, 2)] * (len(searches) // 2) and searches
 
 
 def test_diagnostic_options_are_checked(capsys: pytest.CaptureFixture[str]) -> None:

@@ -455,3 +455,20 @@ def test_a_sequence_that_misses_plans_every_step_at_the_lead():
         assert step.strategy.name.endswith(" at the lead")
         assert step.strategy.search is not None
         assert step.strategy.search.step == pytest.approx(0.75 * 0.0044)
+
+
+def test_a_sequence_whose_seats_teach_nothing_compares_nothing():
+    # Found by a task hunt: BOX is known better than the reading on every axis, so the first
+    # seat corrects nothing and the program carries no correction; the second step was still
+    # planned again "without what the earlier seats taught" and the difference printed as a
+    # saving, -0.02 s (the two plans differ only by the nominal replay's check).
+    task = DATA_TASKS / "sequence_nothing_taught.yaml"
+    chosen = synthesize(task, SynthesisOptions(proof=ProofOptions(trials=0, workers=1)))
+    assert isinstance(chosen, SequenceSynthesis)
+    first, second = chosen.sequence.steps
+    assert first.knowledge is not None and first.knowledge.corrected == ()
+    assert second.alone is None and second.saved is None
+    text = sequence_summary(chosen.sequence)
+    assert "is not corrected from the seated" in text
+    assert "without what the earlier seats taught" not in text
+    assert "CORRECTED BY THE MEASURED OFFSET" not in chosen.program

@@ -500,6 +500,14 @@ def derive_link(
     k = int(np.argmax(np.abs(p.axis)))
     sigma = 1.0 if p.axis[k] > 0 else -1.0
     r_half = est.dw
+    if r_half >= math.pi / 2:  # no error block certifies a turn of 90° or more
+        where = ", ".join(f"contacts[{i}]" for i in p.indices)
+        turn = "" if r_half >= math.pi - 1e-9 else f" ±{math.degrees(r_half):.3g}°"
+        raise EstimationError(
+            f"{where}: these contacts leave {p.obj!r} free to turn{turn} about the normal of "
+            f"{p.rest_face}; add a contact that fixes its orientation (against a wall or an "
+            "edge), or give its pose and uncertainty instead"
+        )
     keep_e = [i for i in range(3) if 2 * e_half[i] > tiny]
     keep_r = 2 * r_half > tiny
     r_name = _ROT_PARAMS[k]

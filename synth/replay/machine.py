@@ -291,7 +291,7 @@ class ReplayMachine(TimelineMachine[Motion]):
                     f"the arm needs {fastest:.4g} s"
                 )
                 self._raise(self._violation("too_fast", line, detail, self._time))
-        errors = [self._error] + [self.hand_errors.next(line, k) for k in range(len(targets))]
+        errors = [self._error] + [self.hand_errors.next(line, k + 1) for k in range(len(targets))]
         segments = []
         t = 0.0
         for k in range(len(targets)):

@@ -65,7 +65,7 @@ class Violation:
 class HandDraw:
     """One hand positioning error a run drew: for target ``target`` of the motion at ``line``.
 
-    ``target`` counts the motion's targets from 0 (its via points, then its destination);
+    ``target`` counts the motion's targets from 1 (its via points, then its destination);
     ``values``: the error's parameters by name (``x``, ``y``, ``z`` [m], ``rx``, ``ry``, ``rz``
     [rad], the task's ``manipulator.hand_error`` block), in the order the block lists them.
     """

@@ -214,12 +214,12 @@ class HandErrors:
         """True when every error is the identity."""
         return self._space is None
 
-    def next(self, line: int | None = None, target: int = 0) -> pin.SE3:
+    def next(self, line: int | None = None, target: int = 1) -> pin.SE3:
         """The error of the next hand target: E = transl ∘ rot(x̂) ∘ rot(ŷ) ∘ rot(ẑ).
 
         ``line``, ``target``: the AL line of the motion the target belongs to and its place
-        among the motion's targets, kept with the draw (:attr:`draws`) so a trial's report can
-        say which motion drew which error.
+        among the motion's targets (from 1), kept with the draw (:attr:`draws`) so a trial's
+        report can say which motion drew which error.
         """
         self.drawn += 1
         if self._space is None:

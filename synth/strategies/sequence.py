@@ -356,13 +356,17 @@ def _compared(
     options: PlanOptions | None,
     base_dir: Path | str | None,
 ) -> StepPlan:
-    """``step`` with ``alone``: planned from the same start with the task's own blocks."""
-    if step.index == node.steps[0].index:
-        return step  # the first step knows nothing earlier seats could have taught
+    """``step`` with ``alone``: planned from the same start with the task's own blocks.
+
+    Only where an earlier seat taught something (its correction is in the program): else the
+    two plans differ only by what the comparison leaves out (the nominal replay's check), and
+    the difference was printed as a saving, negative ones included.
+    """
+    before = list(itertools.takewhile(lambda e: e.index != step.index, node.steps))
+    if not any(e.knowledge is not None and e.knowledge.corrected for e in before):
+        return step  # nothing earlier seats taught (the first step too): nothing to compare
     plain = spec
-    for earlier in node.steps:
-        if earlier.index == step.index:
-            break
+    for earlier in before:
         plain = seated(plain, earlier.insertion)
     alone: PlanResult | str
     try:
