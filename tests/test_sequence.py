@@ -23,6 +23,7 @@ from synth.cli import main
 from synth.codegen.sequence import SequenceStep, emit_sequence
 from synth.errors.seat import after_seat, seat_error, seated
 from synth.exceptions import SpecError
+from synth.models.believed import believed_graph
 from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task, parse_task
 from synth.pipeline import (
@@ -472,3 +473,47 @@ def test_a_sequence_whose_seats_teach_nothing_compares_nothing():
     assert "is not corrected from the seated" in text
     assert "without what the earlier seats taught" not in text
     assert "CORRECTED BY THE MEASURED OFFSET" not in chosen.program
+
+
+def test_a_part_located_by_contacts_is_corrected_from_its_seat():
+    # Found by a task hunt: the seed's box in its fixture (A.1), located by contacts to x
+    # ±0.55 cm and rz ±1.31° (worse than the reading's ε = 0.249 cm along x), was never
+    # corrected from a seat: the seat's knowledge read the task's graph before its contacts
+    # were resolved, where the box has no block. Oracle: the replay's own true worlds (the box
+    # drawn from its contacts) and readings within ε, corrected as the program does.
+    task = DATA_TASKS / "fixture_two_pins.yaml"
+    spec = load_task(task)
+    grasp_distance = 0.0354
+    step = next(s for s in spec.steps if s.hole == "BH3")
+    knowledge = after_seat(spec.step(step), step, grasp_distance)
+    assert knowledge is not None and knowledge.part_al == "BOX"
+    assert knowledge.corrected == ("x",)
+    believed = believed_graph(spec)
+    assert knowledge.before == believed.links["box"].uncertainty
+    nominal = believed.world_from("box")
+    h = np.array(knowledge.seat)
+    bounds = knowledge.after.bounds()
+    rows, rhs = knowledge.after.constraint_rows()
+    a, b = np.array(rows).reshape(-1, len(bounds)), np.array(rhs)
+    graph = AttributeGraph(spec)
+    rng = np.random.default_rng(15)
+    for _ in range(2_000):
+        true = sample_world(graph, rng).pose("box")
+        direction = rng.normal(size=3)
+        reading = (
+            rng.uniform(0, 1) ** (1 / 3) * knowledge.epsilon * direction / np.linalg.norm(direction)
+        )
+        offset = nominal.actInv(true.act(h) + reading) - h
+        offset[1:] = 0.0  # BOX ← BOX·TRANS(NILROTN, Δ) along x only (correct.al.j2)
+        relative = (nominal * pin.SE3(np.eye(3), offset)).inverse() * true
+        turn = math.atan2(relative.rotation[1, 0], relative.rotation[0, 0])
+        value = {"x": relative.translation[0], "y": relative.translation[1], "rz": turn}
+        v = np.array([value[name] for name in bounds])
+        for name, bound in bounds.items():
+            assert bound.lo - 1e-9 <= value[name] <= bound.hi + 1e-9, (name, value[name], bound)
+        if b.size:
+            assert np.all(a @ v <= b + 1e-9)
+    # and the sequence is planned with the correction, which the referee proves
+    chosen = synthesize(task, SynthesisOptions(proof=ProofOptions(trials=20, workers=1)))
+    assert isinstance(chosen, SequenceSynthesis)
+    assert "BOX CORRECTED BY THE MEASURED OFFSET (ALONG X)" in chosen.program

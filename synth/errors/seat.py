@@ -43,6 +43,7 @@ import numpy as np
 import pinocchio as pin
 from pinocchio import rpy as pin_rpy
 
+from synth.models.believed import believed_graph
 from synth.models.graph import AttributeGraph
 from synth.models.insertion import derive
 from synth.models.spec import WORLD, HoleShape, InsertionSpec, PinShape, TaskSpec
@@ -142,8 +143,13 @@ def _cross_coefficients(h: np.ndarray) -> dict[str, dict[str, float]]:
 def after_seat(
     spec: TaskSpec, insertion: InsertionSpec, grasp_distance: float
 ) -> SeatKnowledge | None:
-    """The knowledge a seated ``insertion`` gives (module docstring); None if nothing is learnt."""
-    graph = AttributeGraph(spec)
+    """The knowledge a seated ``insertion`` gives (module docstring); None if nothing is learnt.
+
+    A part located by contacts is read at its derived pose and block (:func:`believed_graph`),
+    and the next step's task holds it as placed with its corrected block.
+    """
+    graph = believed_graph(spec)
+    spec = graph.spec
     hole = graph.resolve(insertion.hole)
     part = _corrected_part(graph, hole)
     if part is None:
