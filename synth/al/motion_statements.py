@@ -71,15 +71,7 @@ class Motions(Evaluation):
             poses.append(value.se3)
         frame_from_hand = hand_from_frame.inverse()
         targets = [p * frame_from_hand for p in (*poses[1:], poses[0])]
-        constraints = self._constraints(s, cx)
-        monitors, handlers, arrivals = self._monitors(s, cx)
-        yield from self._motion(
-            s,
-            cx,
-            lambda: self.machine.move(targets, monitors, constraints, s.line),
-            handlers,
-            arrivals,
-        )
+        yield from self._motion(s, cx, lambda m, c: self.machine.move(targets, m, c, s.line))
 
     def _hand_from(self, moved: Variable, s: ast.Move) -> pin.SE3:
         if moved.hand:
@@ -105,42 +97,39 @@ class Motions(Evaluation):
     def _open(self, s: ast.Open, cx: ProcessContext) -> Iterator[None]:
         self._device(s.device)
         width = self._dimensioned(s.width, cx, LENGTH, "an opening")
-        constraints = self._constraints(s, cx)
-        monitors, handlers, arrivals = self._monitors(s, cx)
-        start = lambda: self.machine.open_hand(width, monitors, constraints, s.line)  # noqa: E731
-        yield from self._motion(s, cx, start, handlers, arrivals)
+        yield from self._motion(s, cx, lambda m, c: self.machine.open_hand(width, m, c, s.line))
 
     def _close(self, s: ast.Close, cx: ProcessContext) -> Iterator[None]:
         self._device(s.device)
         width = None
         if s.width is not None:
             width = self._dimensioned(s.width, cx, LENGTH, "an opening")
-        constraints = self._constraints(s, cx)
-        monitors, handlers, arrivals = self._monitors(s, cx)
-        start = lambda: self.machine.close_hand(width, monitors, constraints, s.line)  # noqa: E731
-        yield from self._motion(s, cx, start, handlers, arrivals)
+        yield from self._motion(s, cx, lambda m, c: self.machine.close_hand(width, m, c, s.line))
 
     def _center(self, s: ast.Center, cx: ProcessContext) -> Iterator[None]:
         self._device(s.device)
-        constraints = self._constraints(s, cx)
-        monitors, handlers, arrivals = self._monitors(s, cx)
-        start = lambda: self.machine.center(monitors, constraints, s.line)  # noqa: E731
-        yield from self._motion(s, cx, start, handlers, arrivals)
+        yield from self._motion(s, cx, lambda m, c: self.machine.center(m, c, s.line))
 
     def _motion(
         self,
-        s: ast.Stmt,
+        s: ast.Move | ast.Open | ast.Close | ast.Center,
         cx: ProcessContext,
-        start: Callable[[], MotionResult],
-        handlers: list[ast.Stmt],
-        arrivals: list[ast.Stmt],
+        start: Callable[[list[MonitorSpec], list[MotionConstraint]], MotionResult],
     ) -> Iterator[None]:
+        """Run a motion statement: its clauses, the machine's motion, its handlers.
+
+        The WITH clauses, then the ON clauses, are read; ``start`` begins the motion with the
+        monitors and constraints; handlers run as the machine reports firings, then the ON
+        ARRIVAL handlers.
+        """
+        constraints = self._constraints(s, cx)
+        monitors, handlers, arrivals = self._monitors(s, cx)
         if self._active is not None:
             raise self._error(
                 s, "a motion statement in a monitor body needs STOP first: the arm is still moving"
             )
         state = MotionState()
-        result = start()
+        result = start(monitors, constraints)
         self._active = state
         reported: set[int] = set()
         try:

@@ -125,9 +125,11 @@ def derive(graph: AttributeGraph, spec: InsertionSpec) -> InsertionParameters:
         friction=friction,
         wedge_tilt=wedge,
         seat=derived["d_f"],
-        seat_by="the hole's depth"
-        if hole_shape.depth <= reach
-        else ("the pin's length less its tip taper"),
+        seat_by=(
+            "the hole's depth"
+            if hole_shape.depth <= reach
+            else "the pin's length less its tip taper"
+        ),
         notes=tuple(notes),
         lead_height=lead_height,
         **values,
@@ -180,7 +182,7 @@ def refuse_unprovable(
     pin_al: str,
     hole_al: str,
     reading_floor: float,
-    line_of: Callable[[str], int | None] = lambda field: None,
+    line_of: Callable[[str], int | None],
 ) -> None:
     """Raise :class:`SpecError` for a task no program can be proven on.
 

@@ -279,25 +279,23 @@ class WorkcellModel:
                 owner_shape.size[2] if owner_shape is not None and owner_shape.type == "box" else 0
             )
             axis = local.rotation[:, 2]
+            not_box = owner_shape is None or owner_shape.type != "box"
+            mouth_off = abs(local.translation[2] - top) > _PLACEMENT_TOLERANCE
             tilted = axis[2] < 1.0 - _PLACEMENT_TOLERANCE
-            if owner_shape is None or owner_shape.type != "box" or tilted:
-                field = f"frames[{self._index[node.name]}]" + (".pose.rotation" if tilted else "")
-            elif abs(local.translation[2] - top) > _PLACEMENT_TOLERANCE:
-                field = f"frames[{self._index[node.name]}].pose.translation"
-            else:
-                field = ""
-            if field:
+            if not_box or mouth_off or tilted:
                 # name only what is wrong: an axis within the tolerance is along z (its angle
                 # in floating point, 1e-6°, is not a second fault)
                 faults = []
-                if owner_shape is None or owner_shape.type != "box":
+                if not_box:
                     kind = "no shape" if owner_shape is None else f"a {owner_shape.type}"
                     faults.append(f"its part {graph.nodes[owner].al_name} is {kind}")
-                if abs(local.translation[2] - top) > _PLACEMENT_TOLERANCE:
+                if mouth_off:
                     faults.append(f"its mouth is {100 * float(local.translation[2]):.4g} cm up")
                 if tilted:
                     angle = math.degrees(math.acos(min(1.0, float(axis[2]))))
                     faults.append(f"its axis {angle:.3g}° off z")
+                wrong = ".pose.rotation" if tilted else "" if not_box else ".pose.translation"
+                field = f"frames[{self._index[node.name]}]{wrong}"
                 raise SpecError(
                     field,
                     f"hole {node.name!r}: the replay drills holes only into the top face of a box "

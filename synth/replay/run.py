@@ -313,8 +313,8 @@ class TrialRecord:
         """The record as JSON (SI units).
 
         ``{"index", "seed", "errors", "outcome", "line", "message", "time", "statements",
-        "violations", "hand_errors"}``; ``hand_errors`` lists ``{"line", "x", …, "rz"}`` per
-        target, in the order the run moved.
+        "violations", "hand_errors"}``; ``hand_errors`` lists ``{"line", "target", "x", …,
+        "rz"}`` per target, in the order the run moved.
         """
         return {
             "index": self.index,
