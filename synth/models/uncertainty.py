@@ -201,18 +201,27 @@ class Uncertainty(SpecModel):
         return {p: getattr(self, p) for p in PARAMS if getattr(self, p) is not None}
 
     def constraint_rows(self) -> tuple[list[list[float]], list[float]]:
-        """``min ≤ c·v ≤ max`` as rows of ``A v ≤ b`` over :meth:`bounds`' order [SI]."""
+        """``min ≤ c·v ≤ max`` as rows of ``A v ≤ b`` over :meth:`bounds`' order [SI].
+
+        Each constraint is divided by its largest |c_k|, which leaves its set of values alone
+        and its entries within [−1, 1]: HiGHS refuses a matrix entry of 10¹⁵ or more as a
+        model error (``large_matrix_value``), which the feasibility check read as "no error
+        values" for ``x·10¹⁵ + y ≤ 0.4 in`` (x = y = 0 satisfies it), and it drops entries
+        below 10⁻⁹ (``small_matrix_value``), here a term worth less than 10⁻⁹ of the largest.
+        """
         names = list(self.bounds())
         rows: list[list[float]] = []
         rhs: list[float] = []
         for c in self.constraints:
-            row = [c.terms.get(n, 0.0) for n in names]
+            scale = max(abs(x) for x in c.terms.values())
+            scale = scale if scale > 0.0 else 1.0
+            row = [c.terms.get(n, 0.0) / scale for n in names]
             if c.max is not None:
                 rows.append(row)
-                rhs.append(c.max)
+                rhs.append(c.max / scale)
             if c.min is not None:
                 rows.append([-x for x in row])
-                rhs.append(-c.min)
+                rhs.append(-c.min / scale)
         return rows, rhs
 
     @model_validator(mode="after")
