@@ -97,6 +97,35 @@ def test_planar_urdf_limits_and_ik_round_trip(planar: Path):
         assert np.linalg.norm(pin.log6(arm.forward(s).actInv(target)).vector) < 1e-9
 
 
+def test_a_tool_link_named_like_its_joint_is_the_tool(tmp_path: Path):
+    # URDF links and joints are named apart, so a fixed joint may carry its child link's name
+    # (example-robot-data's Unitree Z1: gripperStator). Pinocchio then has a FIXED_JOINT and a
+    # BODY frame "tool", and looking the name up alone raised "several frames match": every
+    # command exited 70. The tool is the link, 5 cm out along the tip's x (a closed form).
+    offset = 0.05
+    text = PLANAR.replace(
+        "</robot>",
+        '  <link name="tool"><collision><origin xyz="0.01 0 0"/>\n'
+        '    <geometry><box size="0.02 0.02 0.02"/></geometry></collision></link>\n'
+        '  <joint name="tool" type="fixed"><parent link="tip"/><child link="tool"/>'
+        f'<origin xyz="{offset} 0 0"/></joint>\n</robot>',
+    )
+    path = tmp_path / "same_name.urdf"
+    path.write_text(text)
+    arm = load_urdf_arm(path, "tool", HandSpec())
+    q = np.array([0.5, -0.7, 0.05])
+    reach = L2 + q[2] + offset
+    x = L1 * math.cos(q[0]) + reach * math.cos(q[0] + q[1])
+    y = L1 * math.sin(q[0]) + reach * math.sin(q[0] + q[1])
+    assert np.allclose(arm.forward(q).translation, [x, y, 0.0], atol=1e-12)
+    # the tool link's box and the hand hang from the link's frame, not the joint's
+    scene = CollisionScene(arm, [])
+    frames = arm.model.frames
+    parents = {g.name: frames[g.parentFrame] for g in scene.geometry_model.geometryObjects}
+    for name in ("tool_0", "palm", "finger_left"):
+        assert (parents[name].name, parents[name].type) == ("tool", pin.FrameType.BODY)
+
+
 def test_unknown_tool_frame_and_missing_file_are_reported(planar: Path, tmp_path: Path):
     with pytest.raises(ArmModelError, match="no frame 'flange'"):
         load_urdf_arm(planar, "flange", HandSpec())

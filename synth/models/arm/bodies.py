@@ -36,9 +36,22 @@ class Body:
 
     def geometry_object(self, model: pin.Model) -> pin.GeometryObject:
         """Make the Pinocchio geometry object (parent frame looked up by link name)."""
-        frame = model.getFrameId(self.link) if model.existFrame(self.link) else 0
+        frame = frame_id(model, self.link) if model.existFrame(self.link) else 0
         frame = frame if frame < len(model.frames) else 0
         return pin.GeometryObject(self.name, self.joint, frame, self.placement, self.geometry)
+
+
+def frame_id(model: pin.Model, name: str) -> int:
+    """The frame called ``name``: its link's (BODY) frame when a joint has the name too.
+
+    URDF links and joints have separate names, so a link and the fixed joint above it may share
+    one (example-robot-data's Unitree Z1: ``gripperStator``); Pinocchio's ``getFrameId`` of the
+    name alone then raises "several frames match". A fixed joint's frame and its child link's
+    coincide, so the link's frame is the one meant either way.
+    """
+    if model.existFrame(name, pin.FrameType.BODY):
+        return int(model.getFrameId(name, pin.FrameType.BODY))
+    return int(model.getFrameId(name))
 
 
 _AXIS_ROTATION: dict[str, np.ndarray] = {

@@ -23,6 +23,7 @@ import pinocchio as pin
 
 from synth.exceptions import ArmModelError
 from synth.models.arm.arm import Arm
+from synth.models.arm.bodies import frame_id
 from synth.models.arm.hand import palm_top
 from synth.models.arm.ur import ur_inverse
 from synth.models.arm.urdf import example_robot_data_dir, load_urdf_arm
@@ -83,7 +84,7 @@ def load_builtin_arm(
         closed = ur_inverse(
             entry.closed_form,
             arm.model,
-            arm.model.getFrameId(entry.tool_frame),
+            frame_id(arm.model, entry.tool_frame),
             arm.hand_frame,
             arm.limits,
         )

@@ -19,7 +19,7 @@ import pinocchio as pin
 
 from synth.exceptions import ArmModelError
 from synth.models.arm.arm import Arm
-from synth.models.arm.bodies import Body
+from synth.models.arm.bodies import Body, frame_id
 from synth.models.arm.fingers import FingerJoint, urdf_hand
 from synth.models.arm.hand import hand_bodies
 from synth.models.arm.limits import JointKind, JointLimits
@@ -175,7 +175,7 @@ def load_urdf_arm(
     world_from_base = pin.SE3.Identity() if world_from_base is None else world_from_base
     place_base(model, geometry, world_from_base)
 
-    tool = model.frames[model.getFrameId(tool_frame)]
+    tool = model.frames[frame_id(model, tool_frame)]
     hand_placement = tool.placement * offset
     hand_id = model.addFrame(
         pin.Frame(HAND_FRAME, tool.parentJoint, 0, hand_placement, pin.FrameType.OP_FRAME)
@@ -261,7 +261,7 @@ def _finger_joints(
 
     def finger_in_hand(q: np.ndarray, link: int) -> np.ndarray:
         pin.framesForwardKinematics(model, data, q)
-        hand = data.oMf[model.getFrameId(tool_frame)] * tool_offset
+        hand = data.oMf[frame_id(model, tool_frame)] * tool_offset
         return hand.actInv(data.oMf[link]).translation
 
     for name in names:
