@@ -120,8 +120,8 @@ BAD = [
     ("bad AL name", GOOD.replace("al_name: BOX", "al_name: 2BOX"), "frames[0].al_name", 4),
     ("duplicate AL name", GOOD.replace("al_name: BH1", "al_name: box"), "frames[1].al_name", 10),
     ("unknown field", GOOD.replace("name: t", "name: t\nfoo: 1"), "foo", 2),
-    # pydantic lists "lo missing" first; the key written, ``a``, is the one to name
-    ("unknown bound key", GOOD.replace("x: 0.3 in", "x: {a: 1}"), "frames[0].uncertainty.x.a", 7),
+    # a mapping is no form of bound (the record's own {lo, hi} skipped every check of the two)
+    ("mapping bound", GOOD.replace("x: 0.3 in", "x: {a: 1}"), "frames[0].uncertainty.x", 7),
     (
         "unknown rotation axis",
         GOOD.replace("[0 cm, 0 cm, 4 cm]}", "[0 cm, 0 cm, 4 cm], rotation: [{w: 225 deg}]}"),
@@ -190,8 +190,8 @@ def test_bad_spec_names_field_and_line(label: str, text: str, path: str, line: i
     assert info.value.line == line, str(info.value)
     if label == "short translation":  # not "this field is required" of a field never written
         assert info.value.detail == "the list has 2 values; value 3 is required too"
-    if label == "unknown bound key":
-        assert info.value.detail == "unknown field"
+    if label == "mapping bound":
+        assert info.value.detail.startswith("a bound is one tolerance ('0.3 in' means ±0.3 in)")
     if label == "unknown rotation axis":  # not "axis: this field is required"
         assert info.value.detail.startswith("'w' is not an axis")
     if label == "equality constraint":

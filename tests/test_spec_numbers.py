@@ -240,6 +240,32 @@ def test_constraint_coefficients_are_quantities_not_expressions() -> None:
     assert "constraints" in refused(data).path
 
 
+@pytest.mark.parametrize(
+    ("place", "bound"),
+    [
+        ("box", {"lo": -200, "hi": 200}),  # ±200 rad: exit 70 in the first-order model
+        ("box", {"lo": 0.01, "hi": -0.01}),  # bare numbers, min > max: taken as ±1 cm
+        ("box", {"lo": 0.005, "hi": 0.01}),  # excludes the nominal 0: taken as +0.5..+1 cm
+        ("hand", {"lo": -3, "hi": 3}),  # a ±3 m hand error, with no unit
+    ],
+)
+def test_a_bound_written_as_the_records_own_lo_hi_is_refused(
+    place: str, bound: dict[str, float]
+) -> None:
+    # The record's {lo, hi} (SI) skipped every check a tolerance or [min, max] gets.
+    data = seed()
+    if place == "box":
+        i, box = frame(data, "box")
+        box["uncertainty"]["rz" if bound["hi"] == 200 else "x"] = bound
+        path = f"frames[{i}].uncertainty.{'rz' if bound['hi'] == 200 else 'x'}"
+    else:
+        data["manipulator"]["hand_error"]["y"] = bound
+        path = "manipulator.hand_error.y"
+    error = refused(data)
+    assert error.path == path
+    assert "one tolerance" in error.detail and "[min, max]" in error.detail
+
+
 # --------------------------------------------------------------------------------------------
 # End to end: exit 2 naming the field, at once
 

@@ -464,8 +464,8 @@ def _check_feasible(unc: Uncertainty, loc: PathKey, fail: Any) -> None:
 def _first_error(errors: list[Any]) -> Any:
     """The error to report: the first, unless it is a missing field beside an unknown one.
 
-    ``{a: 1}`` where ``{lo, hi}`` is expected gives pydantic's "lo missing" first; the key the
-    engineer wrote, ``a``, is the one to name (a misspelt field is the usual cause).
+    A mapping with a misspelt key gives pydantic's "<the required key> missing" first; the key
+    the engineer wrote is the one to name (a misspelt field is the usual cause).
     """
     first = errors[0]
     if first.get("type") != "missing":

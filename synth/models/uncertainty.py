@@ -42,13 +42,19 @@ def _check_rotation_error(given: Any, largest_rad: float) -> None:
         )
 
 
+_FORMS = "a bound is one tolerance ('0.3 in' means ±0.3 in) or [min, max], each with its unit"
+
+
 def _bound(kind: Literal["length", "angle"]) -> Any:
     def parse(v: Any) -> Any:
-        if isinstance(v, Bound | dict):
-            return v
+        if isinstance(v, Bound):
+            return v  # built in code, already in SI
+        if isinstance(v, dict):
+            # the record's own {lo, hi} in SI would bypass the unit and bound checks below
+            raise ValueError(_FORMS)
         if isinstance(v, list | tuple):
             if len(v) != 2:
-                raise ValueError("a bound is one tolerance ('0.3 in' means ±0.3 in) or [min, max]")
+                raise ValueError(_FORMS)
             lo, hi = (parse_quantity(x, kind) for x in v)
             if lo > hi:
                 raise ValueError(f"min {v[0]!r} exceeds max {v[1]!r}")
