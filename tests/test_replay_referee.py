@@ -271,7 +271,7 @@ def test_one_trial_alone_is_the_trial_of_the_full_run(capsys: pytest.CaptureFixt
     assert searches == [(57, 1), (57, 2)] * (len(searches) // 2) and searches
 
 
-def test_diagnostic_options_are_checked(capsys: pytest.CaptureFixture[str]) -> None:
+def test_diagnostic_options_are_checked(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     for option, value, rule in (
         ("--min-success", "1.5", "a success rate is between 0 and 1, got 1.5"),
         ("--min-success", "nan", "a success rate is between 0 and 1, got nan"),
@@ -294,6 +294,12 @@ def test_diagnostic_options_are_checked(capsys: pytest.CaptureFixture[str]) -> N
     )
     assert main(["replay", "--task", str(SEED_TASK), "--preamble", "--json"]) == 2
     assert "--preamble prints AL declarations; --json does not apply" in capsys.readouterr().err
+    # --export-trajectory with --trial wrote nothing and said nothing (exit 0, no file)
+    exported = tmp_path / "trial.csv"
+    assert main(["replay", str(SEED_SEARCH), "--task", str(SEED_TASK), "--trial", "3",
+                 "--export-trajectory", str(exported)]) == 2  # fmt: skip
+    assert "--export-trajectory writes the nominal run's motion" in capsys.readouterr().err
+    assert not exported.exists()
 
 
 def test_a_reader_that_closes_the_pipe_ends_the_replay_quietly() -> None:

@@ -86,7 +86,9 @@ def test_poses_follow_the_arm_and_the_pin(nominal: Trace) -> None:
     assert np.ptp(np.array(offsets), axis=0).max() < 1e-6
 
 
-def test_trace_json_and_cli(tmp_path: Path, program: str) -> None:
+def test_trace_json_and_cli(
+    tmp_path: Path, program: str, capsys: pytest.CaptureFixture[str]
+) -> None:
     al = tmp_path / "seed.al"
     al.write_text(program, encoding="utf-8")
     out = tmp_path / "trace.json"
@@ -99,6 +101,7 @@ def test_trace_json_and_cli(tmp_path: Path, program: str) -> None:
     assert doc["events"][-1]["kind"] == "outcome"
     assert main([*args, "--trace", str(out), "--trial", "2"]) == 0
     assert json.loads(out.read_text())["trial"] == 2
+    assert f"trace of trial 2 written to {out}" in capsys.readouterr().out
     # Without --trace, --trial re-runs that trial alone (exit 0: trial 2 succeeds).
     assert main([*args, "--trial", "2"]) == 0
 

@@ -69,6 +69,12 @@ def _cmd_replay(args: argparse.Namespace) -> int:
             raise SynthError("--svg draws the Monte Carlo trials: give --trials 1 or more")
     if args.trial is not None and args.svg is not None:
         raise SynthError("--svg draws many trials; --trial I re-runs one")
+    if args.trial is not None and args.export_trajectory is not None:
+        # the export is the commanded motion for a real arm: the nominal run, not a trial's
+        raise SynthError(
+            "--export-trajectory writes the nominal run's motion; --trial I re-runs a trial "
+            "(--trace records the trial)"
+        )
     export = args.export_trajectory
     if export is not None and not export.lower().endswith((".yaml", ".yml", ".csv")):
         raise SynthError(f"--export-trajectory {export}: the file must end in .yaml or .csv")
@@ -76,7 +82,13 @@ def _cmd_replay(args: argparse.Namespace) -> int:
     if args.trial is not None:
         if args.trace is not None:
             _write_trace(args, text)
-        return _run_one(args, text)
+        status = _run_one(args, text)
+        if args.trace is not None:
+            print(
+                f"trace of trial {args.trial} written to {args.trace}",
+                file=sys.stderr if args.json else sys.stdout,
+            )
+        return status
 
     from synth.report import replay_summary
 
