@@ -95,9 +95,13 @@ def bench_arm(name: str, arm: Arm, home: np.ndarray, repeat: int) -> list[tuple[
     rows.append((f"{name}: swept check, free ({ok.checks} checks)", sw_free, f"{sw_free / fk:.0f}"))
     assert not hit.free and ok.free
     via = q0 + 0.5 * (q1 - q0) + 0.05
-    mt = per_call_us(lambda: motion_time(arm.limits, [q0, q1]), repeat)
+    mq = per_call_us(lambda: motion_time(arm.limits, [q0, via, q1]), repeat)
+    rows.append((f"{name}: motion time, quintic (the replay's), 1 via", mq, f"{mq / fk:.1f}"))
+    mt = per_call_us(lambda: motion_time(arm.limits, [q0, q1], rule="ruckig"), repeat)
     rows.append((f"{name}: motion time, ruckig, 2 points", mt, f"{mt / fk:.1f}"))
-    mtv = per_call_us(lambda: motion_time(arm.limits, [q0, via, q1]), max(repeat // 10, 5))
+    mtv = per_call_us(
+        lambda: motion_time(arm.limits, [q0, via, q1], rule="ruckig"), max(repeat // 10, 5)
+    )
     rows.append((f"{name}: motion time, ruckig, 1 via", mtv, f"{mtv / fk:.1f}"))
     seed = per_call_us(lambda: motion_time(arm.limits, [q0, via, q1], rule="seed"), repeat)
     rows.append((f"{name}: motion time, seed rule, 1 via", seed, f"{seed / fk:.1f}"))

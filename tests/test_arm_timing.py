@@ -1,5 +1,6 @@
-"""Motion time: ruckig durations against the closed-form bang-coast-bang profiles, via points,
-limits along the trajectory, and the seed's rule (L3846) worked by hand."""
+"""Motion time: the quintic rule against the quintic's own derivatives, ruckig durations against
+the closed-form bang-coast-bang profiles, via points, limits along the trajectory, and the
+seed's rule (L3846) worked by hand."""
 
 from __future__ import annotations
 
@@ -17,9 +18,11 @@ from synth.models.arm import (
     build_stanford_arm,
     motion_time,
     plan_trajectory,
+    quintic_motion_time,
     seed_motion_time,
 )
 from synth.models.manipulator import HandSpec
+from synth.replay.motion import quintic
 
 
 @pytest.fixture(scope="module")
@@ -36,13 +39,48 @@ def rest_to_rest(distance: float, v: float, a: float) -> float:
     return distance / v + v / a if distance >= v * v / a else 2 * math.sqrt(distance / a)
 
 
+def _derivatives(delta: np.ndarray, duration: float) -> list[np.ndarray]:
+    """Peak |q′|, |q″|, |q‴| per joint of q0 + Δq·quintic(t/T), by finite differences of the
+    replay's own time law on 20 001 points (the closed forms are not used)."""
+    t = np.linspace(0.0, duration, 20_001)
+    h = t[1] - t[0]
+    q = np.array([quintic(x / duration) for x in t])[:, None] * delta[None, :]
+    peaks = []
+    for _ in range(3):
+        q = np.diff(q, axis=0) / h
+        peaks.append(np.max(np.abs(q), axis=0))
+    return peaks
+
+
+@pytest.mark.parametrize("jerk", [None, [40.0, 20.0, 10.0, 40.0, 40.0, 60.0]])
+def test_the_quintic_rule_keeps_every_joint_within_its_limits_and_meets_one(limits, jerk):
+    # What the replay plays: each segment Δq over its duration with s(τ) = 10τ³ − 15τ⁴ + 6τ⁵.
+    lim = limits if jerk is None else limits.replace(jerk=jerk)
+    rng = np.random.default_rng(11)
+    q0 = np.array([0.0, -1.5, 0.3, 0.0, 0.5, 0.0])
+    for scale in (0.002, 0.02, 0.3):  # jerk-, acceleration- and speed-bound moves
+        delta = rng.uniform(-1.0, 1.0, 6) * scale * (lim.upper - lim.lower) / 4
+        q1 = np.clip(q0 + delta, lim.lower, lim.upper)
+        duration = motion_time(lim, [q0, q1]).duration
+        assert duration == quintic_motion_time(lim, [q0, q1]).duration
+        bounds = (lim.velocity, lim.acceleration, lim.jerk)
+        peaks = _derivatives(q1 - q0, duration)
+        ratios = [p / b for p, b in zip(peaks, bounds, strict=True) if b is not None]
+        # within its limits and the shortest such quintic: some joint reaches one of them
+        # (third differences on steps of T/20 000 carry a rounding of a few 1e-4)
+        worst = max(float(np.max(r)) for r in ratios)
+        assert 1.0 - 2e-3 < worst <= 1.0 + 1e-3
+
+
 def test_single_joint_moves_match_the_closed_form(limits):
     q0 = np.array([0.0, -1.5, 0.3, 0.0, 0.5, 0.0])
     for joint, delta in [(0, 1.2), (0, 0.1), (2, 0.4), (2, 0.02), (5, -2.0)]:
         q1 = q0.copy()
         q1[joint] += delta
         expected = rest_to_rest(abs(delta), limits.velocity[joint], limits.acceleration[joint])
-        assert math.isclose(motion_time(limits, [q0, q1]).duration, expected, rel_tol=1e-9)
+        assert math.isclose(
+            motion_time(limits, [q0, q1], rule="ruckig").duration, expected, rel_tol=1e-9
+        )
 
 
 def test_multi_joint_move_takes_the_slowest_joint(limits):
@@ -52,7 +90,9 @@ def test_multi_joint_move_takes_the_slowest_joint(limits):
         rest_to_rest(abs(d), v, a)
         for d, v, a in zip(q1 - q0, limits.velocity, limits.acceleration, strict=True)
     )
-    assert math.isclose(motion_time(limits, [q0, q1]).duration, expected, rel_tol=1e-9)
+    assert math.isclose(
+        motion_time(limits, [q0, q1], rule="ruckig").duration, expected, rel_tol=1e-9
+    )
 
 
 def test_jerk_limited_move_matches_closed_form():
@@ -66,7 +106,7 @@ def test_jerk_limited_move_matches_closed_form():
         np.array([2.0]),
         np.array([8.0]),
     )
-    t = motion_time(lim, [np.array([0.0]), np.array([3.0])]).duration
+    t = motion_time(lim, [np.array([0.0]), np.array([3.0])], rule="ruckig").duration
     assert math.isclose(t, 3.0 / 1.0 + 1.0 / 2.0 + 2.0 / 8.0, rel_tol=1e-9)
 
 
@@ -74,10 +114,12 @@ def test_via_points_blend_and_stopping_is_the_sum_of_rest_to_rest_moves(limits):
     q0 = np.array([0.0, -1.6, 0.3, 0.0, 1.0, 0.0])
     q1 = np.array([0.5, -1.2, 0.5, 0.3, 0.5, 1.0])
     q2 = np.array([1.0, -1.0, 0.7, 0.6, 0.2, 2.0])
-    stopped = motion_time(limits, [q0, q1, q2], options=TimingOptions(blend_vias=False))
+    stopped = motion_time(
+        limits, [q0, q1, q2], rule="ruckig", options=TimingOptions(blend_vias=False)
+    )
     for (a, b), seg in zip([(q0, q1), (q1, q2)], stopped.segments, strict=True):
-        assert math.isclose(seg, motion_time(limits, [a, b]).duration, rel_tol=1e-9)
-    blended = motion_time(limits, [q0, q1, q2])
+        assert math.isclose(seg, motion_time(limits, [a, b], rule="ruckig").duration, rel_tol=1e-9)
+    blended = motion_time(limits, [q0, q1, q2], rule="ruckig")
     assert blended.duration < stopped.duration  # every joint keeps its direction through q1
 
 

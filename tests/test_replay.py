@@ -91,22 +91,23 @@ def least_time(velocity: np.ndarray, trace: Trace) -> float:
     return float(np.sum(np.max(np.abs(np.diff(q, axis=0)) / velocity, axis=1)))
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="the replay plays ruckig's time-optimal segment durations with a quintic time law, "
-    "whose peak speed is 15/8 of the mean: joint 1 reaches 1.43 × its 2 rad/s limit on the "
-    "listing's first move (line 28)",
-)
 def test_no_joint_moves_faster_than_its_velocity_limit() -> None:
     # Sampled every 20 ms along the replay's own timeline: the limits alone, not the timing rule
-    # that produced the motions, bound each joint's displacement between two samples.
+    # that produced the motions, bound each joint's displacement between two samples. Played
+    # with ruckig's durations the quintic reached 1.43 × joint 1's 2 rad/s on the listing's
+    # first move (line 28). A mean speed over 20 ms never exceeds the peak speed.
     path = DATA_AL / "seed_4_8_search.al"
     context = replay_context(path.read_text(encoding="utf-8"), SEED_TASK, filename=str(path))
     trace = record_run(context, program=path.name)
     q = np.array([sample.q for sample in trace.samples])
     t = np.array([sample.t for sample in trace.samples])
-    speed = np.abs(np.diff(q, axis=0)) / np.maximum(np.diff(t), 1e-12)[:, None]
-    assert np.all(speed <= context.arm.limits.velocity * (1 + 1e-6) + 1e-9)
+    limits = context.arm.limits
+    dt = np.diff(t)
+    speed = np.abs(np.diff(q, axis=0)) / np.maximum(dt, 1e-12)[:, None]
+    assert np.all(speed <= limits.velocity * (1 + 1e-6) + 1e-9)
+    # the quintic at the limit reaches it: some joint comes within 2 % of its speed limit
+    assert np.max(speed / limits.velocity) > 0.98
+    # the acceleration and jerk of the quintic rule: tests/test_arm_timing.py
 
 
 def test_tap_listing_seats_the_pin_in_the_nominal_world() -> None:

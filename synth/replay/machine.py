@@ -23,11 +23,13 @@ achieved by solving the joint angle equations for each position"). Every hand ta
 (:mod:`synth.replay.reach`): a target without an attainable solution is a violation
 (``unreachable`` or ``joint_limit``) at the motion's AL line, and the arm does not move. The arm
 then moves along the straight joint-space segments between the solutions, each in the time
-:func:`synth.models.arm.motion_time` gives (the planner's function; ruckig rule, vias blended),
-stretched by ``WITH DURATION`` constraints, with a quintic time law along each segment
-(seed L3846, AL's 5th-order polynomials). The arm's reading of its hand (BMANIP) is the forward
-kinematics of that path; the true hand is that pose times the hand positioning error, which is
-drawn afresh for every target and blends linearly (SE(3) interpolation) between targets.
+:func:`synth.models.arm.motion_time` gives (the planner's function; its quintic rule, the
+shortest quintic that keeps every joint within its speed, acceleration and jerk limits),
+stretched by ``WITH DURATION`` constraints, with that quintic time law along each segment
+(seed L3846, AL's 5th-order polynomials), at rest at each via. The arm's reading of its hand
+(BMANIP) is the forward kinematics of that path; the true hand is that pose times the hand
+positioning error, which is drawn afresh for every target and blends linearly (SE(3)
+interpolation) between targets.
 
 **Collisions and contact.** Each segment is swept for the arm links, the palm and the fingers
 (at their true opening) against the table, the objects and the free pins, and against each

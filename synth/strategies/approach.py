@@ -137,8 +137,13 @@ def approach_heights(ctx: PlanContext, pickup: Pickup) -> tuple[float, float, fl
     return standoff, dtry, dz
 
 
-def plan_approach(ctx: PlanContext, pickup: Pickup) -> Candidate | Rejection:
-    """The φ with the shortest transport time for one pickup, or why there is none."""
+def plan_approach(
+    ctx: PlanContext, pickup: Pickup, skip: frozenset[float] = frozenset()
+) -> Candidate | Rejection:
+    """The φ with the shortest transport time for one pickup, or why there is none.
+
+    ``skip``: φ values [rad] already tried (their fine motions obstructed, at refinement).
+    """
     opts = ctx.options
     grasp = pickup.strategy.grasp
     d_f = ctx.insertion.d_f
@@ -148,6 +153,8 @@ def plan_approach(ctx: PlanContext, pickup: Pickup) -> Candidate | Rejection:
     timed: list[tuple[float, float, Configuration, Configuration]] = []
     for k in range(steps):
         phi = k * opts.phi_step
+        if phi in skip:
+            continue
         q_app = ctx.nearest(
             hand_at(ctx, grasp, hole_frame_offset(phi, (0.0, 0.0, standoff))),
             pickup.q_departure,

@@ -18,7 +18,7 @@ from synth.units import DEG, INCH, OZ
 
 """[N] the weight of one ounce (AL's ``OZ`` as a force)."""
 
-TimingRule = Literal["ruckig", "seed"]
+TimingRule = Literal["quintic", "ruckig", "seed"]
 HandErrorModel = Literal["independent", "repeatable"]
 
 
@@ -78,7 +78,7 @@ class PlanOptions:
     """[s] OPEN BHAND (seed App. 2, L3854: 50 jiffies)."""
     center_time: float = 50 * JIFFY
     """[s] CENTER BMANIP (seed App. 2, L3857: 50 jiffies)."""
-    timing_rule: TimingRule = "ruckig"
+    timing_rule: TimingRule = "quintic"
     """Motion-time rule of :func:`synth.models.arm.motion_time` (``seed``: L3846)."""
     tap_hand_errors: HandErrorModel = "independent"
     """How the hand errors at the tap and at the insertion relate: ``independent`` blocks

@@ -71,6 +71,40 @@ def _at_the_lead(ctx: PlanContext, missed: str) -> PlanContext:
     return dataclasses.replace(ctx, insertion=at_lead(ins, why))
 
 
+def made_name(made: Refined | Rejection) -> str:
+    """The name of what a refinement made: its strategy's, or the rejected candidate's."""
+    return made.candidate if isinstance(made, Rejection) else made.strategy.name
+
+
+def _refined_at_some_phi(
+    ctx: PlanContext, candidate: Candidate, passed_over: list[Rejection]
+) -> Refined | Rejection:
+    """``candidate`` refined, or else its pickup at the next quickest φ whose fine motions clear.
+
+    §4.4 keeps the quickest φ of each pickup (L2160), but a let-go or an insertion swept into a
+    neighbour is a property of that φ, found only at refinement: the pickup's next quickest φ
+    (:func:`plan_approach` without the φ tried) may clear it. (A wall beside the seat refused
+    every pickup once the quintic timing made φ = 315° quicker than φ = 0°, which clears it.)
+    The φ passed over go to ``passed_over``, to be shown with the other rejections. The
+    candidate's gross time is a lower bound on the others', so best-first order holds.
+    """
+    made = refine(ctx, candidate)
+    tried = {candidate.strategy.phi}
+    obstructed: list[Rejection] = []
+    last = made
+    while isinstance(last, Rejection) and last.kind == "collision":
+        obstructed.append(last)
+        other = plan_approach(ctx, candidate.pickup, skip=frozenset(tried))
+        if isinstance(other, Rejection):
+            break
+        tried.add(other.strategy.phi)
+        last = refine(ctx, other)
+        if isinstance(last, Refined):
+            passed_over.extend(obstructed)
+            return last
+    return made  # every φ tried failed: the quickest one's reason stands for the pickup
+
+
 def plan_task(
     spec: TaskSpec,
     *,
@@ -115,12 +149,14 @@ def plan_task(
         refining[0] = _at_the_lead(ctx, "a replay proof of the sequence")
     lower_bound = minimum_refinement_cost(refining[0], candidates)
 
+    passed_over: list[Rejection] = []  # a pickup's quicker φ whose fine motions are obstructed
+
     def refine_once(candidate: Candidate) -> Refined | Rejection:
         key = id(candidate)
         if key not in refinements:
-            made = refine(refining[0], candidate)
+            made = _refined_at_some_phi(refining[0], candidate, passed_over)
             if refining[0] is not ctx:  # named apart from its refuted first refinement
-                made = _renamed(made, f"{candidate.name} {AT_THE_LEAD}")
+                made = _renamed(made, f"{made_name(made)} {AT_THE_LEAD}")
             refinements[key] = made
         return refinements[key]
 
@@ -153,7 +189,7 @@ def plan_task(
             fallback = best
         else:
             refused.append(_at_stage(verdict, "proof"))
-        remaining = [c for c in remaining if c is not best.candidate]
+        remaining = [c for c in remaining if refinements.get(id(c)) is not best]
         if replan:
             # A trial missed: the proof refuted the task's Δr_ok (measured on the seed's real
             # arm, L1963; the replay captures within the parts' lead). Every candidate is refined
@@ -168,6 +204,7 @@ def plan_task(
     rejected.extend(
         _at_stage(r, "refine") for r in refinements.values() if isinstance(r, Rejection)
     )
+    rejected.extend(_at_stage(r, "refine") for r in passed_over)
     rejected.extend(refused)
     if best is None and fallback is not None:
         # Every candidate planned at the lead was refused (their reasons are in ``rejected``):

@@ -67,6 +67,7 @@ from synth.models.arm.timing import (
     TimingOptions,
     motion_time,
     plan_trajectory,
+    quintic_motion_time,
     seed_motion_time,
 )
 from synth.models.arm.urdf import example_robot_data_dir, load_urdf_arm
@@ -124,6 +125,7 @@ __all__ = [
     "motion_time",
     "nearest_solution",
     "plan_trajectory",
+    "quintic_motion_time",
     "rank_solutions",
     "seed_motion_time",
     "solution_rating",

@@ -1,7 +1,16 @@
-"""Motion time: time-optimal joint trajectories through via points (ruckig) and the seed's rule.
+"""Motion time: AL's quintic at the joint limits, ruckig's time-optimal profile, the seed's rule.
 
 :func:`motion_time` is the one function the planner (ranking strategies by expected time) and
-the replay (reporting the time of what it executed) both call, so the two never disagree.
+the replay (timing what it executes) both call, so the two never disagree.
+
+**Quintic rule** (the default). The replay plays each segment of a move as AL's runtime does,
+straight in joint space with the rest-to-rest quintic s(τ) = 10τ³ − 15τ⁴ + 6τ⁵ (seed L3846),
+whose peaks over τ ∈ [0, 1] are |s′| = 15/8 (τ = ½), |s″| = 10/√3 (τ = ½ ∓ √3/6) and
+|s‴| = 60 (τ = 0, 1). A segment Δq played over T keeps joint j within its limits iff
+T ≥ (15/8)·|Δq_j|/v_j, T ≥ √((10/√3)·|Δq_j|/a_j) and T ≥ ∛(60·|Δq_j|/J_j): its duration is
+the largest of these over the joints. (Playing the ruckig rule's durations with the quintic,
+as the replay once did, drove the seed's first move to 1.34 × a joint's speed limit and 2.6 ×
+an acceleration limit, in the simulation and the exported trajectory alike.)
 
 **Ruckig rule.** A move q_0 → q_1 → … → q_m is planned segment by segment with ruckig under the
 per-joint velocity, acceleration and (when given) jerk limits; each segment is time-optimal for
@@ -30,17 +39,17 @@ from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from ruckig import InputParameter, Result, Ruckig, Synchronization, Trajectory
+from ruckig import InputParameter, Result, Ruckig, RuckigError, Synchronization, Trajectory
 
 from synth.exceptions import TrajectoryError
-from synth.models.arm.limits import JointLimits
+from synth.models.arm.limits import QUINTIC_PEAK_TO_AVERAGE, JointLimits
 
 JIFFY: float = 1.0 / 60.0
 """[s] One jiffy, the AL/WAVE servo tick (seed L3846: 60 jiffies = 1 s)."""
 SEED_GRACE: float = 20 * JIFFY
 """[s] Grace period added to every move by the seed's rule (20 jiffies, L3846)."""
 
-Rule = Literal["ruckig", "seed"]
+Rule = Literal["quintic", "ruckig", "seed"]
 _GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
 
 
@@ -162,7 +171,9 @@ class _Segments:
         trajectory = Trajectory(self.n) if into is None else into
         try:
             result = self.otg.calculate(inp, trajectory)
-        except RuntimeError:
+        except (RuntimeError, RuckigError, ValueError):
+            # RuckigError for limits it cannot time; ValueError for an error code its Python
+            # enum lacks (-101 at a speed limit of 1e-6)
             return None
         return trajectory if result in (Result.Working, Result.Finished) else None
 
@@ -261,20 +272,46 @@ def seed_motion_time(
     return MotionTime(sum(segments) + grace, segments, "seed")
 
 
+QUINTIC_PEAK_ACCELERATION: float = 10.0 / math.sqrt(3.0)
+"""max |s″(τ)| of the quintic time law, at τ = ½ ∓ √3/6 (module docstring)."""
+QUINTIC_PEAK_JERK: float = 60.0
+"""max |s‴(τ)| of the quintic time law, at τ = 0 and 1."""
+
+
+def quintic_motion_time(limits: JointLimits, waypoints: Sequence[ArrayLike]) -> MotionTime:
+    """The quintic rule (module docstring): each segment the shortest quintic within limits."""
+    points = _waypoints(limits, waypoints)
+    segments = []
+    for a, b in itertools.pairwise(points):
+        distance = np.abs(b - a)
+        bounds = [
+            QUINTIC_PEAK_TO_AVERAGE * distance / limits.velocity,
+            np.sqrt(QUINTIC_PEAK_ACCELERATION * distance / limits.acceleration),
+        ]
+        if limits.jerk is not None:
+            bounds.append(np.cbrt(QUINTIC_PEAK_JERK * distance / limits.jerk))
+        segments.append(float(np.max(bounds)))
+    return MotionTime(sum(segments), tuple(segments), "quintic")
+
+
 def motion_time(
     limits: JointLimits,
     waypoints: Sequence[ArrayLike],
-    rule: Rule = "ruckig",
+    rule: Rule = "quintic",
     options: TimingOptions | None = None,
 ) -> MotionTime:
     """Duration [s] of a move from rest through ``waypoints`` to rest, by ``rule``.
 
-    The planner ranks strategies by this and the replay reports it: both must call this
-    function. ``waypoints`` are configurations [rad | m]: start, vias, goal.
+    The planner ranks strategies by this and the replay plays it: both must call this
+    function. ``waypoints`` are configurations [rad | m]: start, vias, goal. Only the quintic
+    rule is what the replay (and an AL runtime) plays; ``ruckig`` (a time-optimal controller
+    blending its vias) and ``seed`` (L3846) are kept for comparison.
     """
+    if rule == "quintic":
+        return quintic_motion_time(limits, waypoints)
     if rule == "seed":
         return seed_motion_time(limits, waypoints)
     if rule != "ruckig":
-        raise ValueError(f"unknown timing rule {rule!r}: 'ruckig' or 'seed'")
+        raise ValueError(f"unknown timing rule {rule!r}: 'quintic', 'ruckig' or 'seed'")
     trajectory = plan_trajectory(limits, waypoints, options)
     return MotionTime(trajectory.duration, trajectory.durations, "ruckig")
