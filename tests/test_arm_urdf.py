@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -126,6 +127,23 @@ def test_a_tool_link_named_like_its_joint_is_the_tool(tmp_path: Path):
         assert (parents[name].name, parents[name].type) == ("tool", pin.FrameType.BODY)
 
 
+@pytest.mark.parametrize(("speed", "shown"), [("1e9", "1e+09"), ("1e-6", "1e-06")])
+def test_a_urdf_speed_limit_out_of_range_is_refused_like_an_override(
+    tmp_path: Path, speed: str, shown: str
+) -> None:
+    # An override must lie in RATE_RANGE (1e-3 to 1e6 per s); the URDF's own limit was not
+    # checked, and 1e9 crashed the trajectory timing (exit 70), 1e-6 timed a half turn at 36 days.
+    path = tmp_path / "fast.urdf"
+    path.write_text(PLANAR.replace('velocity="3"', f'velocity="{speed}"'))
+    with pytest.raises(
+        ArmModelError, match=f"joint j2's velocity limit {re.escape(shown)} rad/s lies outside"
+    ):
+        load_urdf_arm(path, "tip", HandSpec())
+    # the task's own speeds replace the file's, and then it loads
+    arm = load_urdf_arm(path, "tip", HandSpec(), velocity=[2.0, 3.0, 0.5])
+    assert np.allclose(arm.limits.velocity, [2.0, 3.0, 0.5])
+
+
 def test_unknown_tool_frame_and_missing_file_are_reported(planar: Path, tmp_path: Path):
     with pytest.raises(ArmModelError, match="no frame 'flange'"):
         load_urdf_arm(planar, "flange", HandSpec())
@@ -178,7 +196,30 @@ def test_continuous_joint_is_rejected(tmp_path: Path):
             'type="revolute"><parent link="base"/>', 'type="continuous"><parent link="base"/>'
         )
     )
-    with pytest.raises(ArmModelError, match="only revolute and prismatic"):
+    # named by the URDF's word, not Pinocchio's class (it said "JointModelRUBZ")
+    with pytest.raises(ArmModelError, match=r"'j1' is continuous .* only revolute and prismatic"):
+        load_urdf_arm(path, "tip", HandSpec())
+
+
+def test_a_mimic_joint_is_refused_not_driven_on_its_own(tmp_path: Path):
+    # Pinocchio builds a <mimic> joint as a free one: the program drove j2 apart from j1
+    # (1.49 rad apart in the hunt's export) on an arm where j2 follows j1.
+    path = tmp_path / "mimic.urdf"
+    j2_end = '<limit lower="-2.5" upper="2.5" velocity="3" effort="10"/></joint>'
+    assert PLANAR.count(j2_end) == 1
+    path.write_text(
+        PLANAR.replace(j2_end, j2_end.replace("</joint>", '<mimic joint="j1"/></joint>'))
+    )
+    with pytest.raises(ArmModelError, match="joint 'j2' mimics 'j1'"):
+        load_urdf_arm(path, "tip", HandSpec())
+
+
+def test_an_arm_without_collision_shapes_is_refused(tmp_path: Path):
+    # With only <visual> shapes no link was checked: a program was proven with the arm's base
+    # standing inside the box.
+    path = tmp_path / "ghost.urdf"
+    path.write_text(PLANAR.replace("<collision>", "<visual>").replace("</collision>", "</visual>"))
+    with pytest.raises(ArmModelError, match="no link has a <collision> shape"):
         load_urdf_arm(path, "tip", HandSpec())
 
 

@@ -99,6 +99,17 @@ def test_yaml_and_csv_round_trip(tmp_path: Path, observed, capsys) -> None:  # t
     assert [m["guarded"] for m in marks] == [r["guarded"] == "1" for r in rows]
 
 
+def test_export_makes_its_directory_as_every_output_does(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+    # --trace, --svg, plan -o and view -o made a missing directory; the export was refused
+    out = tmp_path / "new" / "dir" / "nominal.csv"
+    code = main(
+        ["replay", str(SEED_PROGRAM), "--task", str(SEED_TASK), "--trials", "0",
+         "--export-trajectory", str(out)]
+    )  # fmt: skip
+    assert code == 0 and f"written to {out}" in capsys.readouterr().out
+    assert out.read_text(encoding="utf-8").startswith("time_from_start,theta1")
+
+
 def test_export_refuses_an_unknown_suffix(capsys) -> None:  # type: ignore[no-untyped-def]
     code = main(
         ["replay", str(SEED_PROGRAM), "--task", str(SEED_TASK), "--export-trajectory", "x.txt"]

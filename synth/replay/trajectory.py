@@ -236,7 +236,10 @@ def trajectory_csv(trajectory: Trajectory) -> str:
 
 
 def write_trajectory(trajectory: Trajectory, path: str | Path) -> None:
-    """Write ``trajectory`` to ``path``: ``.yaml``/``.yml`` as ROS YAML, ``.csv`` as CSV."""
+    """Write ``trajectory`` to ``path``, its directory made as needed.
+
+    ``.yaml``/``.yml`` as ROS YAML, ``.csv`` as CSV.
+    """
     target = Path(path)
     suffix = target.suffix.lower()
     if suffix in (".yaml", ".yml"):
@@ -246,6 +249,7 @@ def write_trajectory(trajectory: Trajectory, path: str | Path) -> None:
     else:
         raise SynthError(f"{target}: the trajectory's file must end in .yaml, .yml or .csv")
     try:
+        target.parent.mkdir(parents=True, exist_ok=True)  # as every other output's is
         target.write_text(text, encoding="utf-8", newline="\n")
     except OSError as exc:
         raise SynthError(f"cannot write {target}: {exc.strerror or exc}") from None

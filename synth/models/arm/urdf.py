@@ -13,9 +13,11 @@ from __future__ import annotations
 import importlib.metadata
 from collections.abc import Sequence
 from pathlib import Path
+from xml.etree import ElementTree
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import NDArray
 
 from synth.exceptions import ArmModelError
 from synth.models.arm.arm import Arm
@@ -25,6 +27,7 @@ from synth.models.arm.hand import hand_bodies
 from synth.models.arm.limits import JointKind, JointLimits
 from synth.models.arm.native_stderr import captured_stderr, native_detail
 from synth.models.manipulator import HandSpec
+from synth.units import RATE_RANGE
 
 DEFAULT_ACCELERATION_TIME: float = 0.25
 """[s] Assumed time to reach full speed when a URDF arm has no acceleration limits (the same
@@ -52,11 +55,36 @@ def joint_kinds(model: pin.Model, source: str = "") -> tuple[JointKind, ...]:
             kinds.append("prismatic")
         else:
             raise ArmModelError(
-                f"joint {model.names[j]!r} is {short}; only revolute and prismatic joints "
-                f"(one coordinate each) are supported",
+                f"joint {model.names[j]!r} is {_URDF_TYPES.get(short.rstrip('XYZ'), short)}; "
+                "only revolute and prismatic joints with limits (one coordinate each) are "
+                "supported",
                 source,
             )
     return tuple(kinds)
+
+
+_URDF_TYPES = {
+    "JointModelRUB": "continuous (a revolute joint without limits): give it type revolute and "
+    "its <limit lower upper>",
+    "JointModelRevoluteUnboundedUnaligned": "continuous (a revolute joint without limits): give "
+    "it type revolute and its <limit lower upper>",
+    "JointModelFreeFlyer": "floating",
+    "JointModelPlanar": "planar",
+}
+"""The URDF word for a Pinocchio joint model synth does not drive (its name less the axis)."""
+
+
+def _mimic_joints(path: Path) -> dict[str, str]:
+    """The URDF's joints that follow another (``<mimic joint=…>``): name → the joint followed."""
+    try:
+        root = ElementTree.parse(path).getroot()
+    except ElementTree.ParseError:
+        return {}  # Pinocchio read it; urdfdom is the parser of record
+    return {
+        str(joint.get("name")): str(mimic.get("joint"))
+        for joint in root.iter("joint")
+        if (mimic := joint.find("mimic")) is not None
+    }
 
 
 def place_base(
@@ -127,6 +155,25 @@ def example_robot_data_dir() -> Path | None:
     return None
 
 
+def _check_urdf_speeds(
+    names: Sequence[str], kinds: Sequence[JointKind], speeds: NDArray[np.float64], source: str
+) -> None:
+    """The URDF's own speed limits lie in :data:`~synth.units.RATE_RANGE`, as an override must.
+
+    Unchecked, ``velocity="1e9"`` crashed the trajectory timing (exit 70) and ``1e-6`` timed a
+    half turn at 36 days; its default acceleration follows it (v / 0.25 s).
+    """
+    lo, hi = RATE_RANGE
+    for name, kind, speed in zip(names, kinds, speeds, strict=True):
+        if not lo <= speed <= hi:
+            unit = "rad/s" if kind == "revolute" else "m/s"
+            raise ArmModelError(
+                f"joint {name}'s velocity limit {speed:g} {unit} lies outside {lo:g}–{hi:g} "
+                f"{unit}; give the arm's speeds in manipulator.arm.velocity_limits",
+                source,
+            )
+
+
 def load_urdf_arm(
     urdf: Path | str,
     tool_frame: str,
@@ -172,6 +219,21 @@ def load_urdf_arm(
         locked = [model.getJointId(f.name) for f in finger_joints]
         model, geometry = pin.buildReducedModel(model, geometry, locked, pin.neutral(model))
     kinds = joint_kinds(model, source)
+    followers = _mimic_joints(path)
+    for j in range(1, model.njoints):
+        if model.names[j] in followers:
+            # Pinocchio builds a mimic joint as a free one: a program would drive it alone
+            raise ArmModelError(
+                f"joint {model.names[j]!r} mimics {followers[model.names[j]]!r}; synth drives "
+                "every joint on its own (a mimicking finger joint is named in fingers)",
+                source,
+            )
+    if geometry.ngeoms == 0:
+        raise ArmModelError(
+            "no link has a <collision> shape: the arm could not be checked against the "
+            "workcell or itself",
+            source,
+        )
     world_from_base = pin.SE3.Identity() if world_from_base is None else world_from_base
     place_base(model, geometry, world_from_base)
 
@@ -200,6 +262,8 @@ def load_urdf_arm(
                 f"{len(values)} values for {n} joints ({joints})", f"manipulator.arm.{what}_limits"
             )
     names = tuple(model.names[j] for j in range(1, model.njoints))
+    if velocity is None:
+        _check_urdf_speeds(names, kinds, v, source)
     try:
         limits = JointLimits(
             names,
