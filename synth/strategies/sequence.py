@@ -268,7 +268,12 @@ def _grown(
             base, earlier, task, made = node.plain, (*earlier[:-1], declined), plain_task, other
     if isinstance(made, Rejection):
         return made
-    knowledge = after_seat(task, insertion, made.strategy.pickup.grasp.distance) if reuse else None
+    pickup = made.strategy.pickup
+    knowledge = (
+        after_seat(task, insertion, pickup.grasp.distance, pickup.grasp_determination or ())
+        if reuse
+        else None
+    )
     plain = seated(base, insertion)
     step = StepPlan(index, insertion, task, made.plan, knowledge, node.q, made.q_end)
     return _Node(
