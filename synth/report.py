@@ -272,7 +272,7 @@ _REF = (
     r"|ch\.\s*[IVX]+(?:\s*§\s*\d+(?:\.\d+)*)?|App\.\s*\d+|A\.\d+)|\bL\d{4}(?:[–-]\d+)?)"
 )
 _REF_ALONE = re.compile(rf"\s*\(\s*{_REF}\s*\)")
-_REF_FIRST = re.compile(rf"\(\s*{_REF}\s*[,;]\s*")
+_REF_FIRST = re.compile(rf"\(\s*{_REF}\s*[,;:]\s*")
 _REF_AFTER = re.compile(rf"\s*[,;]\s*{_REF}(?=\s*[),;]|\s*$)", re.MULTILINE)
 _REF_ANY = re.compile(rf"\s*{_REF}")
 
@@ -283,7 +283,8 @@ def strip_seed_references(text: str) -> str:
     The default output of ``synth plan`` is read without the thesis at hand; ``--verbose``
     keeps the references, and ``docs/glossary.md`` lists them. A parenthesis left empty goes,
     and so does a separator left dangling: ``(measured, seed L1963)`` → ``(measured)``,
-    ``(seed L2122; --try-harder keeps all)`` → ``(--try-harder keeps all)``.
+    ``(seed L2122; --try-harder keeps all)`` → ``(--try-harder keeps all)``,
+    ``(seed §4.5.1: grounds for rejection)`` → ``(grounds for rejection)``.
     """
     text = _REF_ALONE.sub("", text)
     text = _REF_FIRST.sub("(", text)

@@ -132,6 +132,10 @@ def test_seed_references_are_stripped_with_their_separators() -> None:
         "Δr_ok (measured) exceeds"
     )
     assert strip_seed_references("First order (seed Eqn 3.5.1): Δx") == "First order: Δx"
+    # refine.py's tilt refusal: it printed "(: grounds for rejection)"
+    assert strip_seed_references("0.360° (seed §4.5.1: grounds for rejection)") == (
+        "0.360° (grounds for rejection)"
+    )
     assert strip_seed_references("no reference here (3 rings)") == "no reference here (3 rings)"
 
 
