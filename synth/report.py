@@ -343,7 +343,7 @@ def plan_summary(
         *(f"  - {d}" for d in s.decisions),
         "",
         f"Expected time {s.expected_time:.2f} s = pickup {s.pickup_time:.2f} + transport "
-        f"{s.transport_time:.2f} + fine {s.fine_time:.2f}",
+        f"{s.transport_time:.2f} + fine {s.fine_time:.2f} + release {s.release_time:.2f}",
     ]
     if proof is not None:
         lines.append(f"Proof: {proof.summary()}")
@@ -377,10 +377,14 @@ def plan_summary(
             )
             fine, total = f"{c.fine_time:8.2f}", f"{c.expected_time:8.2f}"
         else:
-            what, fine, total = "not refined (cutoff)", f"{'—':>8}", f"{'≥':>4}{c.gross_time:4.2f}"
+            least = c.gross_time + c.release_time  # and the minimum refinement cost
+            what, fine, total = "not refined (cutoff)", f"{'—':>8}", f"{'≥':>4}{least:4.2f}"
         mark = "*" if c is s else " "
         lines.append(f"{mark} {c.name:{width}}{c.gross_time:10.2f}{fine}{total}  {what or 'none'}")
-    lines.append("  (gross = pickup + transport; total = gross + fine: the expected time)")
+    lines.append(
+        "  (gross = pickup + transport; total = gross + fine + release (let go, get clear): "
+        "the expected time)"
+    )
     lines += ["", f"Rejected ({len(result.rejected)}):"]
     lines += [
         f"  - {r.candidate} [{r.stage or '?'}, {r.kind}]: {r.reason}" for r in result.rejected

@@ -29,6 +29,7 @@ turned over): ``end = hole ∘ trans(rot(ẑ, φ), (0, 0, z))``; the hand is the
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -112,8 +113,37 @@ class Candidate:
 
     @property
     def cost(self) -> float:
-        """Gross motion time [s] (pickup + transport), the best-first priority (L2455)."""
-        return self.strategy.gross_time
+        """The best-first priority [s]: the gross motion time (pickup + transport, L2455).
+
+        And the release after the insertion, known before refinement as the gross motions are.
+        """
+        return self.strategy.gross_time + self.strategy.release_time
+
+
+def getting_clear(
+    ctx: PlanContext, q_destination: Configuration, strategy: PinInHoleStrategy
+) -> tuple[pin.SE3, Configuration | None]:
+    """Where the hand goes to get clear after letting go (seed L2844), and the arm there."""
+    away = strategy.get_clear
+    if away.base == strategy.hand:
+        target = ctx.arm.forward(q_destination) * away.xf
+    else:
+        base = ctx.graph.world_from(ctx.graph.resolve(away.base)) * away.xf
+        target = base * strategy.pickup.grasp.pin_from_hand()
+    return target, ctx.nearest(target, q_destination)
+
+
+def release_time(
+    ctx: PlanContext, q_destination: Configuration, strategy: PinInHoleStrategy
+) -> float:
+    """[s] The let-go and get-clear the program ends with (seed L2839–2844).
+
+    OPEN (50 jiffies, L3854) and the move back to where the hand is clear (none where it has
+    no arm solution, which :func:`~synth.strategies.fine.fine_motion_obstruction` refuses).
+    """
+    _, q_clear = getting_clear(ctx, q_destination, strategy)
+    move = 0.0 if q_clear is None else ctx.motion([q_destination, q_clear])
+    return ctx.options.open_time + move
 
 
 def approach_heights(ctx: PlanContext, pickup: Pickup) -> tuple[float, float, float]:
@@ -271,6 +301,7 @@ def plan_approach(
         if detour is None
         else detour.destinations(ctx.pin_al, grasp.pin_from_hand().inverse()),
     )
+    strategy = dataclasses.replace(strategy, release_time=release_time(ctx, q_dest, strategy))
     world = pickup.world.with_facts(
         ApproachPhi(ctx.pin_al, ctx.hole_al, round(phi, 12)),
         ApproachStandoff(ctx.pin_al, ctx.hole_al, standoff),

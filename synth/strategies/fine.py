@@ -41,7 +41,7 @@ import pinocchio as pin
 from synth.models.arm import CollisionScene, SweepOptions
 from synth.models.arm.sweep import LinkDisplacement
 from synth.models.spec import BoxShape
-from synth.strategies.approach import Candidate, hand_at
+from synth.strategies.approach import Candidate, getting_clear, hand_at
 from synth.strategies.context import Configuration, PlanContext
 from synth.strategies.records import Destination, PinInHoleStrategy
 from synth.strategies.relations import hole_frame_offset
@@ -148,12 +148,7 @@ def fine_motion_obstruction(
         reason = _sweep(ctx, scene, [cand.q_destination], motion, options)
         if reason is not None:
             return reason
-    away = strategy.get_clear
-    if away.base == strategy.hand:
-        target = ctx.arm.forward(cand.q_destination) * away.xf
-    else:
-        target = _pin_world(ctx, away) * grasp.pin_from_hand()
-    q_clear = ctx.nearest(target, cand.q_destination)
+    target, q_clear = getting_clear(ctx, cand.q_destination, strategy)
     if q_clear is None:
         return "no arm solution where the hand gets clear"
     spread = _unreached_get_clear(ctx, strategy, cand.q_destination, target)

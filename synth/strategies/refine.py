@@ -277,6 +277,7 @@ def _fine_motions(
         search=search,
         fine_time=fine_time,
         dr_ok=ins.dr_ok,  # the lead's, when refined at the lead
+        dtheta_ok=ins.dtheta_ok,  # the wedging limit's, when tighter than the task's
         success_threshold=success_threshold(dz, opts.tau, opts.reading_floor),
         decisions=tuple(decisions),
     )
