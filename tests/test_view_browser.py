@@ -150,13 +150,18 @@ def test_the_page_is_self_contained(page) -> None:
     assert "WebGLRenderer" in html and "Three.js Authors" in html  # three.js inlined, licence
 
 
-def test_cli_writes_the_view(tmp_path: Path) -> None:
+def test_cli_writes_the_view(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     al = tmp_path / "seed.al"
     al.write_text(synthesized(SEED_TASK).program, encoding="utf-8")
     out = tmp_path / "v" / "view.html"
     assert main(["view", str(SEED_TASK), str(al), "-o", str(out)]) == 0
     assert "synth view" in out.read_text(encoding="utf-8")
+    assert f"view of {al} on seed_4_8 written to {out}" in capsys.readouterr().out
     assert main(["view", str(SEED_TASK), str(tmp_path / "missing.al"), "-o", str(out)]) == 2
+    # without a program it plans one and writes it to no file: it said "view of seed_4_8.al"
+    assert main(["view", str(SEED_TASK), "-o", str(out), "--proof-trials", "0"]) == 0
+    said = capsys.readouterr().out
+    assert "view of the program planned for it on seed_4_8 written to" in said
 
 
 def test_the_view_to_dash_goes_to_standard_output(

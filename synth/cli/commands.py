@@ -84,8 +84,10 @@ def _cmd_view(args: argparse.Namespace) -> int:
     write_output(args.output, view_html(view_scene(context, trace, text)).encode("utf-8"))
     report = trace.report
     where = "standard output" if args.output == "-" else args.output
+    # a program planned here is written to no file: its name is not one to look for
+    shown = name if args.program is not None else "the program planned for it"
     print(
-        f"view of {name} on {spec.name} written to {where} "
+        f"view of {shown} on {spec.name} written to {where} "
         f"(nominal run: {report.outcome}, {report.time:.2f} s, {len(trace.samples)} frames)",
         file=sys.stderr if args.output == "-" else sys.stdout,
     )

@@ -71,7 +71,7 @@ def _at_the_lead(ctx: PlanContext, missed: str) -> PlanContext:
     return dataclasses.replace(ctx, insertion=at_lead(ins, why))
 
 
-def made_name(made: Refined | Rejection) -> str:
+def _made_name(made: Refined | Rejection) -> str:
     """The name of what a refinement made: its strategy's, or the rejected candidate's."""
     return made.candidate if isinstance(made, Rejection) else made.strategy.name
 
@@ -156,7 +156,7 @@ def plan_task(
         if key not in refinements:
             made = _refined_at_some_phi(refining[0], candidate, passed_over)
             if refining[0] is not ctx:  # named apart from its refuted first refinement
-                made = _renamed(made, f"{made_name(made)} {AT_THE_LEAD}")
+                made = _renamed(made, f"{_made_name(made)} {AT_THE_LEAD}")
             refinements[key] = made
         return refinements[key]
 
