@@ -122,16 +122,16 @@ def seat_error(
     hole_shape = graph.nodes[graph.resolve(insertion.hole)].shape
     assert isinstance(pin_shape, PinShape) and isinstance(hole_shape, HoleShape)
     play = max(0.0, (hole_shape.diameter - pin_shape.diameter) / 2)
-    play += math.sqrt(sum(max(-lo, hi) ** 2 for n, lo, hi in grip if n in TRANSLATION_PARAMS))
+    offset = math.sqrt(sum(max(-lo, hi) ** 2 for n, lo, hi in grip if n in TRANSLATION_PARAMS))
     hand = spec.manipulator.hand_error if spec.manipulator is not None else None
     if hand is None:
-        return play
+        return offset + play
     bounds = hand.bounds()
 
     def norm(params: tuple[str, ...]) -> float:
         return math.sqrt(sum(max(-b.lo, b.hi) ** 2 for p, b in bounds.items() if p in params))
 
-    return norm(TRANSLATION_PARAMS) + norm(ROTATION_PARAMS) * grasp_distance + play
+    return norm(TRANSLATION_PARAMS) + norm(ROTATION_PARAMS) * grasp_distance + offset + play
 
 
 def _corrected_part(graph: AttributeGraph, hole: str) -> str | None:

@@ -92,6 +92,9 @@ class Candidate:
     counter: int = 0
     transport_detour: Detour | None = None
     """The transport lifted over the workcell (:mod:`synth.strategies.detour`), if it is."""
+    clear: tuple[pin.SE3, Configuration | None] | None = None
+    """Where the hand gets clear after letting go and the arm there (:func:`getting_clear`),
+    found once with the release time and swept at refinement."""
 
     @property
     def name(self) -> str:
@@ -120,6 +123,11 @@ class Candidate:
         return self.strategy.gross_time + self.strategy.release_time
 
 
+def pin_world(ctx: PlanContext, destination: Destination) -> pin.SE3:
+    """The world pose [m] of a destination point (its base frame as believed, then ``xf``)."""
+    return ctx.graph.world_from(ctx.graph.resolve(destination.base)) * destination.xf
+
+
 def getting_clear(
     ctx: PlanContext, q_destination: Configuration, strategy: PinInHoleStrategy
 ) -> tuple[pin.SE3, Configuration | None]:
@@ -128,20 +136,19 @@ def getting_clear(
     if away.base == strategy.hand:
         target = ctx.arm.forward(q_destination) * away.xf
     else:
-        base = ctx.graph.world_from(ctx.graph.resolve(away.base)) * away.xf
-        target = base * strategy.pickup.grasp.pin_from_hand()
+        target = pin_world(ctx, away) * strategy.pickup.grasp.pin_from_hand()
     return target, ctx.nearest(target, q_destination)
 
 
 def release_time(
-    ctx: PlanContext, q_destination: Configuration, strategy: PinInHoleStrategy
+    ctx: PlanContext, q_destination: Configuration, q_clear: Configuration | None
 ) -> float:
     """[s] The let-go and get-clear the program ends with (seed L2839–2844).
 
-    OPEN (50 jiffies, L3854) and the move back to where the hand is clear (none where it has
-    no arm solution, which :func:`~synth.strategies.fine.fine_motion_obstruction` refuses).
+    OPEN (50 jiffies, L3854) and the move back to where the hand is clear, ``q_clear`` (none
+    where it has no arm solution, which :func:`~synth.strategies.fine.fine_motion_obstruction`
+    refuses).
     """
-    _, q_clear = getting_clear(ctx, q_destination, strategy)
     move = 0.0 if q_clear is None else ctx.motion([q_destination, q_clear])
     return ctx.options.open_time + move
 
@@ -301,7 +308,8 @@ def plan_approach(
         if detour is None
         else detour.destinations(ctx.pin_al, grasp.pin_from_hand().inverse()),
     )
-    strategy = dataclasses.replace(strategy, release_time=release_time(ctx, q_dest, strategy))
+    clear = getting_clear(ctx, q_dest, strategy)
+    strategy = dataclasses.replace(strategy, release_time=release_time(ctx, q_dest, clear[1]))
     world = pickup.world.with_facts(
         ApproachPhi(ctx.pin_al, ctx.hole_al, round(phi, 12)),
         ApproachStandoff(ctx.pin_al, ctx.hole_al, standoff),
@@ -318,4 +326,5 @@ def plan_approach(
         world,
         axis,
         transport_detour=detour,
+        clear=clear,
     )

@@ -41,9 +41,9 @@ import pinocchio as pin
 from synth.models.arm import CollisionScene, SweepOptions
 from synth.models.arm.sweep import LinkDisplacement
 from synth.models.spec import BoxShape
-from synth.strategies.approach import Candidate, getting_clear, hand_at
+from synth.strategies.approach import Candidate, getting_clear, hand_at, pin_world
 from synth.strategies.context import Configuration, PlanContext
-from synth.strategies.records import Destination, PinInHoleStrategy
+from synth.strategies.records import PinInHoleStrategy
 from synth.strategies.relations import hole_frame_offset
 from synth.strategies.search import inside, pattern_points
 
@@ -73,10 +73,6 @@ def _sweep(
     ctx.counters.sweeps += 1
     points = list(path) if len(path) > 1 else [path[0], path[0]]
     return ctx.gross.obstruction(scene, points, motion, options)
-
-
-def _pin_world(ctx: PlanContext, destination: Destination) -> pin.SE3:
-    return ctx.graph.world_from(ctx.graph.resolve(destination.base)) * destination.xf
 
 
 def _through_bottom(ctx: PlanContext, part: str) -> str | None:
@@ -128,18 +124,16 @@ def fine_motion_obstruction(
     tap = strategy.tap
     if tap is not None:
         pin_from_hand = grasp.pin_from_hand()
-        q_via = ctx.nearest(_pin_world(ctx, tap.via) * pin_from_hand, cand.q_transported)
+        q_via = ctx.nearest(pin_world(ctx, tap.via) * pin_from_hand, cand.q_transported)
         q_tap = (
-            None
-            if q_via is None
-            else ctx.nearest(_pin_world(ctx, tap.place) * pin_from_hand, q_via)
+            None if q_via is None else ctx.nearest(pin_world(ctx, tap.place) * pin_from_hand, q_via)
         )
         if q_via is None or q_tap is None:
             return f"no arm solution at the tap on {tap.surface}"
         reason = _sweep(ctx, scene, [q_via, q_tap], f"tap on {tap.surface}", options)
         if reason is not None:
             return reason
-    seated = _pin_world(ctx, strategy.destination)
+    seated = pin_world(ctx, strategy.destination)
     options = gross.seated_options(ctx.graph, part, hand_seated, seated_hand_displacement(ctx))
     turns = [None, *gross.seat_turns(ctx.graph, ctx.hole_frame, ctx.world_hole.translation)]
     scenes = [(t, gross.letting_go(strategy.let_go_opening, seated, part, t)) for t in turns]
@@ -148,7 +142,8 @@ def fine_motion_obstruction(
         reason = _sweep(ctx, scene, [cand.q_destination], motion, options)
         if reason is not None:
             return reason
-    target, q_clear = getting_clear(ctx, cand.q_destination, strategy)
+    # the candidate's, found with its release time (refinement keeps the get-clear point)
+    target, q_clear = cand.clear or getting_clear(ctx, cand.q_destination, strategy)
     if q_clear is None:
         return "no arm solution where the hand gets clear"
     spread = _unreached_get_clear(ctx, strategy, cand.q_destination, target)
