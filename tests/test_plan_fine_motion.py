@@ -87,15 +87,18 @@ def test_sideways_error_has_no_vertical_margin_and_plans() -> None:
     spec = load_task(SIDEWAYS)
     ctx = plan_context(spec)
     block = ctx.gross.carrying.displacements["BLOCK"]
-    # Ball bound: |t| = √2·0.5 in plus 3° at the block's bounding radius (the 20 × 20 × 4.9 cm
-    # box's ball about its origin at the bottom face: |AABB centre| + half-diagonal).
+    # Any direction: |t| = √2·0.5 in plus the chord of 3° at the corners' lever about z, √200
+    # cm (the 20 × 20 × 4.9 cm box). The ball about its origin at the bottom face (|AABB
+    # centre| + half-diagonal) charged 3° at 16.80 cm: more than the approach height, and
+    # every candidate was refused before the directional bound.
+    lever = math.hypot(10, 10) * CM
+    chord = 2 * math.sin(1.5 * DEG) * lever
+    shift = math.hypot(0.5, 0.5) * 2.54 * CM
+    assert block.bound() == pytest.approx(shift + chord, rel=1e-12)
     radius = 2.45 * CM + math.hypot(10, 10, 2.45) * CM
-    ball = math.hypot(0.5, 0.5) * 2.54 * CM + 3 * DEG * radius
-    assert block.bound() == pytest.approx(ball, rel=1e-9)
-    assert ball > 2.54 * CM  # more than the approach height: every candidate was refused
+    assert shift + 3 * DEG * radius > 2.54 * CM
     assert block.support(np.array([0.0, 0.0, 1.0])) == pytest.approx(0.0, abs=1e-15)
-    # Sideways, the support is the x error plus the chord of 3° at the radius (n ⟂ z).
-    chord = 2 * math.sin(1.5 * DEG) * radius
+    # Sideways, the support is the x error plus the chord of 3° at that lever (n ⟂ z).
     assert block.support(np.array([1.0, 0.0, 0.0])) == pytest.approx(0.5 * 2.54 * CM + chord)
     proven = synthesized(SIDEWAYS, trials=10)
     assert proven.strategy.search is not None and len(proven.attempts) == 1

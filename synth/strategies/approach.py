@@ -15,7 +15,8 @@ Heights (L2186–2190: "the principal constraint" is that the approach point sta
 surface and a full insertion stops on force whatever Δz): the seed takes ``standoff = 1 in``
 and ``dtry = d_f + 1 in``; here they are at least that and at least the certified Δz along the
 axis at the approach point plus :data:`APPROACH_CLEARANCE`, ``standoff ≥ Δz + m + c`` (m the
-held pin's margin in the gross-motion sweep, which ends there) and ``dtry − d_f ≥ Δz + c``, so
+held pin's margin in the gross-motion sweep, which ends there), at least what that sweep asks
+of the pin and the hole's part along the axis plus c, and ``dtry − d_f ≥ Δz + c``, so
 a part whose height is poorly known gets a higher approach instead of a rejection. The final
 approach runs through via points along the axis that bound the bow of the joint-interpolated
 move (:mod:`synth.strategies.bow`). The result is the "embryo" pin-in-hole strategy (L2201)
@@ -167,9 +168,17 @@ def approach_heights(ctx: PlanContext, pickup: Pickup) -> tuple[float, float, fl
     _, certified = model.displacement_along(np.array([0.0, 0.0, 1.0]))
     dz = float(certified.magnitude)
     # The transport ends at the approach point: its sweep keeps the held pin its ball margin
-    # under the hand error (clearance.GrossMotionCheck) from the part, which Δz alone omits.
+    # under the hand error (clearance.GrossMotionCheck) from the part, which Δz alone omits,
+    # and charges the part the displacement of its farthest point along the axis, where Δz is
+    # that of the hole: a plate tilting about a far origin rises more at its corners.
     held = ctx.gross.carrying.margins.get(ctx.pin_al, 0.0)
-    standoff = max(opts.standoff, dz + held + APPROACH_CLEARANCE)
+    part = ctx.gross.part_of(ctx.graph, ctx.hole_frame)
+    swept = 0.0
+    if part is not None:
+        axis = ctx.world_hole.rotation[:, 2]
+        carrying = ctx.gross.carrying
+        swept = carrying.clearance + carrying.pair_margin_along((ctx.pin_al, part), axis)
+    standoff = max(opts.standoff, dz + held + APPROACH_CLEARANCE, swept + APPROACH_CLEARANCE)
     dtry = ctx.insertion.d_f + max(opts.dtry_extra, dz + APPROACH_CLEARANCE)
     return standoff, dtry, dz
 

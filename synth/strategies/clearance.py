@@ -23,11 +23,14 @@ far either body may be from its believed place:
 
 * a solid under uncertain links L (its own, or its ancestors'): a directional bound
   (:class:`~synth.models.arm.sweep.Displacement`, ``SweepOptions.displacements``): along the
-  direction n between the closest points, Σ_L (Σ_i |n_i|·t_i + Σ_i √(1 − n_i²)·2 sin(θ_i/2)·r_L)
-  with n in L's frame, t_i and θ_i the link's bounds per axis and r_L the radius about L's
-  origin of a ball holding the solid. A part with sideways errors and an exact height has no
-  vertical margin; the ball bound Σ_L (|t|_max + Σθ_i·r_L) applies only where the direction is
-  unknown. The sum is exact as a bound: each link's error moves the subtree rigidly;
+  direction n between the closest points, Σ_L (Σ_i |n_i|·t_i + Σ_i √(1 − n_i²)·2 sin(θ_i/2)·λ_i)
+  with n in L's frame, t_i and θ_i the link's bounds per axis and λ_i the lever about L's axis
+  i of the solid's farthest hull vertex (a curved solid: r_L, the radius about L's origin of a
+  ball holding it). A part with sideways errors and an exact height has no vertical margin; a
+  plate tilting about its centre is charged at its corners' levers about each axis, not at
+  r_L about both. The ball bound Σ_L (|t|_max + Σ 2 sin(θ_i/2)·λ_i) applies only where the
+  direction is unknown. The sum is exact as a bound: each link's error moves the subtree
+  rigidly;
 * the hand and what it carries, and the wrist bodies (the last three joints), under the arm's
   positioning error (``manipulator.hand_error``, applied in the hand frame): |t|_max + θ_max·r
   with r about the hand origin (taken at the park configuration: wrist bodies turn about the
@@ -36,10 +39,10 @@ far either body may be from its believed place:
 * the arm's own bodies and the held pin move together under one hand error, so a pair of them
   keeps the clearance only (``SweepOptions.rigid``).
 
-Seed_4_8 gives BOX a ball bound of 1.68 cm (0.3 in, 0.2 in, 5° at the 8.8 cm of its bounding
-ball), the fingers 0.29 cm and the wrist 0.5–0.64 cm: without them the planner's program for
-seed_4_8 at the arm's first base, (20, 80) cm, left the box 1 mm and hit it with wrist_body in
-56 of 300 sampled worlds.
+Seed_4_8 gives BOX a ball bound of 1.43 cm (0.3 in, 0.2 in, 5° at its corners' 5.85 cm lever
+about ẑ; 1.68 cm at the 8.8 cm of its bounding ball), the fingers 0.29 cm and the wrist
+0.5–0.64 cm: without them the planner's program for seed_4_8 at the arm's first base,
+(20, 80) cm, left the box 1 mm and hit it with wrist_body in 56 of 300 sampled worlds.
 
 A candidate whose gross motion comes closer than that to a solid is rejected, the bodies named,
 with the closest distance the pair reaches along the motion and the distance it needs.
@@ -74,7 +77,7 @@ from synth.models.arm import (
     SweepResult,
     swept_path,
 )
-from synth.models.arm.bodies import bounding_radius
+from synth.models.arm.bodies import bounding_radius, hull_points
 from synth.models.arm.sweep import Displacement, LinkDisplacement
 from synth.models.graph import AttributeGraph
 from synth.models.spec import WORLD
@@ -106,9 +109,15 @@ def link_margin(block: Uncertainty, radius: float) -> float:
 
 
 def link_displacement(
-    block: Uncertainty, rotation: NDArray[np.float64], radius: float
+    block: Uncertainty,
+    rotation: NDArray[np.float64],
+    radius: float,
+    points: NDArray[np.float64] | None = None,
 ) -> LinkDisplacement:
-    """The directional displacement bound of a link's error block (link frame ``rotation``)."""
+    """The directional displacement bound of a link's error block (link frame ``rotation``).
+
+    ``points``: the solid's hull vertices in the link frame [m], when it has them.
+    """
     bounds = block.bounds()
 
     def extreme(name: str) -> float:
@@ -120,6 +129,7 @@ def link_displacement(
         translation=np.array([extreme(n) for n in ("x", "y", "z")]),
         angles=np.array([extreme(n) for n in ("rx", "ry", "rz")]),
         radius=radius,
+        points=points,
     )
 
 
@@ -129,7 +139,8 @@ def solid_displacement(
     """How far any point of ``frame``'s solid may be from its believed place, per direction.
 
     One :func:`link_displacement` per uncertain link L on the way from the world to ``frame``
-    (itself included), at the radius about L's origin of the solid's bounding ball.
+    (itself included), at the levers about L's axes of the solid's hull vertices, or at the
+    radius about L's origin of its bounding ball (:class:`LinkDisplacement`).
     """
     world_solid = graph.world_from(frame)
     links = []
@@ -138,8 +149,10 @@ def solid_displacement(
         if block is None or not block.bounds():
             continue
         world_link = graph.world_from(name)
-        radius = bounding_radius(geometry, world_link.actInv(world_solid))
-        links.append(link_displacement(block, world_link.rotation, radius))
+        link_from_solid = world_link.actInv(world_solid)
+        radius = bounding_radius(geometry, link_from_solid)
+        points = hull_points(geometry, link_from_solid)
+        links.append(link_displacement(block, world_link.rotation, radius, points))
     return Displacement(tuple(links))
 
 

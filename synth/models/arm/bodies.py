@@ -8,12 +8,15 @@ and the generic hand are made of; sizes are full lengths in [m].
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass
 from typing import Literal
 
 import coal
 import numpy as np
 import pinocchio as pin
+from numpy.typing import NDArray
+from scipy.spatial import ConvexHull, QhullError
 
 Role = Literal["arm", "hand", "held", "environment"]
 
@@ -108,3 +111,29 @@ def bounding_radius(geometry: coal.CollisionGeometry, placement: pin.SE3) -> flo
     geometry.computeLocalAABB()
     centre = placement.translation + placement.rotation @ np.asarray(geometry.aabb_center)
     return float(np.linalg.norm(centre) + geometry.aabb_radius)
+
+
+def hull_points(geometry: coal.CollisionGeometry, placement: pin.SE3) -> NDArray[np.float64] | None:
+    """The vertices (N, 3) [m] of the placed shape's convex hull, or None for a curved shape.
+
+    A box, a mesh and a convex polytope lie inside the hull of their vertices, so a convex
+    function of the point (a lever, a support) is largest over the shape at one of these. A
+    sphere, cylinder or capsule has no finite set of vertices whose hull holds it: None.
+    """
+    if isinstance(geometry, coal.Box):
+        half = np.asarray(geometry.halfSide, dtype=float)
+        signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+        local = signs * half
+    elif isinstance(geometry, coal.BVHModelBase):
+        local = np.asarray(geometry.vertices(), dtype=float).reshape(-1, 3)
+    elif isinstance(geometry, coal.ConvexBase):
+        local = np.asarray(geometry.points(), dtype=float).reshape(-1, 3)
+    else:
+        return None
+    if len(local) == 0:
+        return None
+    placed = local @ placement.rotation.T + placement.translation
+    # A flat or degenerate set has no 3-D hull: all its vertices are still a valid set
+    with contextlib.suppress(QhullError):
+        placed = placed[ConvexHull(placed).vertices]
+    return placed

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -126,32 +127,66 @@ class LinkDisplacement:
     The link's error is ``trans(t) ∘ rot_x(θ_x) ∘ rot_y(θ_y) ∘ rot_z(θ_z)`` in the link frame
     (seed A.2), ``|t_i| ≤ translation_i`` [m], ``|θ_i| ≤ angles_i`` [rad]; ``rotation`` is the
     link frame's orientation in the world and ``radius`` [m] that of a ball about the link's
-    origin holding the solid. A point p of the solid moves by δ = t + (R − I)p, and for a unit
+    origin holding the solid. A point p of the solid moves by δ = t + (R − I)p, and
+
+        R − I = (R_x − I)R_yR_z + (R_y − I)R_z + (R_z − I),
+
+    where (R_a − I)w is perpendicular to the axis a with length 2 sin(θ_a/2)·ρ_a(w), ρ_a(w) the
+    distance of w from the axis. Since |R_yR_z p − p| ≤ (κ_y + κ_z)|p| (κ = 2 sin(θ/2)),
+    ρ_x(R_yR_z p) ≤ ρ_x(p) + (κ_y + κ_z)|p|, likewise ρ_y(R_z p) ≤ ρ_y(p) + κ_z|p|: the lever
+    of axis a at p is λ_a(p) = ρ_a(p) + c_a|p| with c = (κ_y + κ_z, κ_z, 0). For a unit
     direction n (link frame)
 
-        n·δ ≤ Σ_i |n_i|·translation_i + Σ_i √(1 − n_i²)·2 sin(θ_i/2)·r,
+        n·δ(p) ≤ Σ_i |n_i|·translation_i + Σ_a √(1 − n_a²)·κ_a·λ_a(p),
 
-    since R − I = (R_x − I)R_yR_z + (R_y − I)R_z + (R_z − I) and (R_a − I)q is perpendicular to
-    the axis a with length ≤ 2 sin(θ/2)|q| (:meth:`support`). A part with a yaw error and no
-    height error never moves vertically; the ball bound of :meth:`bound` says it moves
-    |t| + Σθ·r in every direction.
+    and the right side, convex in p (norms of linear maps), is largest over the solid at a
+    vertex of its hull (``points``, the link frame [m]): a plate tilting about its centre is
+    charged at its corners' levers about each axis, not at the ball's radius about every axis.
+    Without ``points`` (a curved solid) λ_a = r, the ball (ρ_a ≤ |p| ≤ r, and the composition
+    moves no point off its sphere); where both are known the smaller bound is taken. A part
+    with a yaw error and no height error never moves vertically; the ball bound of
+    :meth:`bound` says it moves |t| + Σ_a κ_a·max_p λ_a(p) in every direction.
     """
 
     rotation: NDArray[np.float64]
     translation: NDArray[np.float64]
     angles: NDArray[np.float64]
     radius: float
+    points: NDArray[np.float64] | None = None
+
+    @cached_property
+    def _levers(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """κ_a (3,) and the levers λ_a(p) (N, 3) [m] of the hull's vertices (class formula)."""
+        kappa = 2.0 * np.sin(self.angles / 2.0)
+        p = np.asarray(self.points, dtype=float)
+        norms = np.linalg.norm(p, axis=1)
+        rho = np.sqrt(np.clip(norms[:, None] ** 2 - p * p, 0.0, None))
+        later = np.array([kappa[1] + kappa[2], kappa[2], 0.0])
+        return kappa, rho + later[None, :] * norms[:, None]
 
     def support(self, direction: NDArray[np.float64]) -> float:
         """Largest displacement [m] of a point of the solid along the world unit ``direction``."""
         n = self.rotation.T @ direction
         along = float(np.abs(n) @ self.translation)
         across = np.sqrt(np.clip(1.0 - n * n, 0.0, 1.0))
-        return along + float(across @ (2.0 * np.sin(self.angles / 2.0))) * self.radius
+        kappa = 2.0 * np.sin(self.angles / 2.0)
+        ball = float(across @ kappa) * self.radius
+        if self.points is None or not np.any(kappa):
+            return along + ball
+        _, levers = self._levers
+        return along + min(ball, float(np.max(levers @ (across * kappa))))
 
     def bound(self) -> float:
-        """Largest displacement [m] in any direction: |t|_max + Σ_i θ_i·r."""
-        return float(np.linalg.norm(self.translation)) + float(np.sum(self.angles)) * self.radius
+        """Largest displacement [m] in any direction: |t|_max + Σ_a κ_a·max_p λ_a(p).
+
+        |t| + Σ_i θ_i·r without the hull's vertices (κ_a ≤ θ_a, λ_a ≤ r).
+        """
+        shift = float(np.linalg.norm(self.translation))
+        ball = float(np.sum(self.angles)) * self.radius
+        if self.points is None or not np.any(self.angles):
+            return shift + ball
+        kappa, levers = self._levers
+        return shift + min(ball, float(np.max(levers @ kappa)))
 
 
 @dataclass(frozen=True)
