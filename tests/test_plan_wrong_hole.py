@@ -54,7 +54,10 @@ def test_a_search_that_reaches_a_second_hole_as_deep_is_refused(monkeypatch, tmp
     monkeypatch.setattr("synth.strategies.refine.wrong_hole_problem", lambda *a, **k: None)
     unchecked = plan_task(spec).strategy
     monkeypatch.undo()
-    wrong = run_trial(replay_context(emit_program(unchecked, believed_graph(spec)), spec), 0, 14)
+    # (the wall budget widened, as below: a loaded machine ended this run as an error)
+    wide = ReplayOptions(max_wall_time=300.0)
+    program = emit_program(unchecked, believed_graph(spec))
+    wrong = run_trial(replay_context(program, spec, options=wide), 0, 14)
     assert wrong.outcome == "failure" and "PIN1 is in BH2, not in BH1" in wrong.message
 
     # the same strategy where the other holes are deeper than the test's window: no problem,
@@ -95,3 +98,22 @@ def test_a_second_hole_narrower_than_the_pin_is_no_safer(monkeypatch, tmp_path) 
     context = replay_context(emit_program(unchecked, believed_graph(narrow)), narrow)
     jammed = run_trial(context, 0, 14)
     assert jammed.outcome == "violation" and "PIN1 wedged in BH2" in jammed.message
+
+
+def test_a_hole_declared_on_another_surface_frame_of_the_face_counts(tmp_path) -> None:
+    # The fourth hunt split a face into two surface frames, one hole on each: the check looked
+    # only at holes of the target's surface frame, and the search's program (proven 100 of 100)
+    # put the pin in the other hole in 5 of 200 worlds. The face is one plane whatever its
+    # frames: BH2 and BH3 declared on a second frame of the same top are refused the same way.
+    spec = yaml.safe_load(TWO_HOLES.read_text(encoding="utf-8"))
+    top = next(f for f in spec["frames"] if f["name"] == "box_top")
+    spec["frames"].append({**top, "name": "box_top_2", "al_name": "BTOP2"})
+    for frame in spec["frames"]:
+        if frame["name"] in ("bh2", "bh3"):
+            frame["shape"]["surface"] = "box_top_2"
+    split = tmp_path / "split.yaml"
+    split.write_text(yaml.safe_dump(spec, sort_keys=False), encoding="utf-8")
+    with pytest.raises(SynthError) as refused:
+        plan_task(load_task(split))
+    first = str(refused.value).splitlines()[0]
+    assert "may find BH2 instead of BH1" in first and "passes the success test" in first

@@ -246,7 +246,8 @@ def plan_tap(ctx: PlanContext, cand: Candidate, footprint: ErrorFootprint) -> Ta
         else ctx.nearest(hand_at(ctx, grasp, hole_frame_offset(phi, offset)), q_via)
     )
     if q_via is None or q_contact is None:
-        return Rejection(cand.name, f"no arm solution at the tapping place {offset} m")
+        at = f"({100 * offset[0]:.2f}, {100 * offset[1]:.2f}) cm from {ctx.hole_al}"
+        return Rejection(cand.name, f"no arm solution at the tapping place {at}")
     blocked = ctx.obstruction(
         ctx.gross.holding(grasp),
         [cand.q_transported, q_via],
