@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 import re
+import threading
 from functools import cache, lru_cache
 from typing import Any, Final, Literal
 
@@ -40,11 +41,24 @@ _SI_UNIT: dict[Dimension, str] = {
 }
 
 
-@cache
+_REGISTRY: list[pint.UnitRegistry] = []
+_REGISTRY_LOCK = threading.Lock()
+
+
 def registry() -> pint.UnitRegistry:
-    """The one pint registry; ``oz`` is read as ounce-force when a force is expected."""
-    ureg: pint.UnitRegistry = pint.UnitRegistry(autoconvert_offset_to_baseunit=True)
-    return ureg
+    """The one pint registry; ``oz`` is read as ounce-force when a force is expected.
+
+    Made once under a lock: ``functools.cache`` is no lock, and the service checks specs in
+    threads. Two first calls at once (building a registry takes about a second) each made
+    their own, and quantities of one met units of the other, "Cannot operate with Unit and
+    Unit of different registries", on valid specs, for the life of the server once a cache
+    below kept the loser's units (the fourth hunt: 40 of 40 submissions refused).
+    """
+    if not _REGISTRY:
+        with _REGISTRY_LOCK:
+            if not _REGISTRY:
+                _REGISTRY.append(pint.UnitRegistry(autoconvert_offset_to_baseunit=True))
+    return _REGISTRY[0]
 
 
 def _dimensionality(dim: Dimension) -> pint.util.UnitsContainer:
@@ -216,6 +230,12 @@ def _parse_text(text: str, dim: Dimension) -> float:
     ureg = registry()
     q = read_quantity(text)
     if q.unitless and dim != "dimensionless":
+        match = QUANTITY.fullmatch(text.strip())
+        if match and match["unit"]:  # '5 rad/rad': units that cancel
+            raise UnitError(
+                f"{text!r} has no unit: {match['unit']} cancels out; write it with a unit of "
+                f"{dim}, e.g. '{match['number']} {_example(dim)}'"
+            )
         raise UnitError(
             f"{text!r} has no unit; write it with a unit of {dim}, "
             f"e.g. '{text.strip()} {_example(dim)}'"

@@ -99,3 +99,58 @@ def test_a_dimensionless_unit_that_is_not_the_dimensions_own_is_refused(
 )
 def test_the_dimensions_own_units_still_read(text: str, dim: Dimension, si: float) -> None:
     assert parse_quantity(text, dim) == pytest.approx(si, rel=1e-12)
+
+
+def test_units_that_cancel_are_named_and_the_example_is_a_valid_quantity() -> None:
+    # Hunt A: '5 rad/rad' suggested "e.g. '5 rad/rad deg'", itself refused
+    with pytest.raises(UnitError) as refused:
+        parse_quantity("5 rad/rad", "angle")
+    message = str(refused.value)
+    assert message == (
+        "'5 rad/rad' has no unit: rad/rad cancels out; write it with a unit of angle, e.g. '5 deg'"
+    )
+    suggested = message.rsplit("e.g. ", 1)[1].strip("'")
+    assert parse_quantity(suggested, "angle") == pytest.approx(math.radians(5))
+    with pytest.raises(UnitError, match=r"cm/mm cancels out; .* e\.g\. '2 cm'"):
+        parse_quantity("2 cm/mm", "length")
+
+
+def test_threads_reading_units_at_once_share_one_registry() -> None:
+    # The service checks specs in threads: 8 first reads at once each built a registry under
+    # functools.cache, and a valid spec was refused with "Cannot operate with Unit and Unit of
+    # different registries" (the fourth hunt, a fresh server and a burst of submissions)
+    import threading
+
+    import synth.units as units
+
+    saved = list(units._REGISTRY)
+    caches = (units._parse_text, units._root)
+    try:
+        units._REGISTRY.clear()
+        for cached in caches:
+            cached.cache_clear()
+        start = threading.Barrier(8)
+        seen: list[object] = []
+        failures: list[BaseException] = []
+
+        def read(k: int) -> None:
+            start.wait()
+            try:
+                value = parse_quantity(f"{k + 1}.5 cm", "length")
+                assert value == pytest.approx((k + 1.5) / 100)
+                assert parse_quantity(f"{k} deg", "angle") == pytest.approx(math.radians(k))
+                seen.append(units.registry())
+            except BaseException as exc:  # collected: a thread's failure is not the test's
+                failures.append(exc)
+
+        threads = [threading.Thread(target=read, args=(k,)) for k in range(8)]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join()
+        assert failures == []
+        assert len(seen) == 8 and all(r is seen[0] for r in seen)
+    finally:
+        units._REGISTRY[:] = saved
+        for cached in caches:
+            cached.cache_clear()
