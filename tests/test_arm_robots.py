@@ -170,6 +170,27 @@ def test_panda_hand_is_read_from_its_fingers():
     # A parametric hand section on an arm with fingers is refused.
     with pytest.raises(ArmModelError, match=r"manipulator.hand.*own fingers"):
         load_arm(ArmSpec(model="panda"), HandSpec())
+    # A tool_offset replaces the built-in's turn of 90° about z: the fingers then slide along
+    # the hand frame's y. The refusal names the task's field, not the package's URDF file
+    # (Hunt A), and says the offset replaces the built-in one.
+    with pytest.raises(ArmModelError) as refused:
+        load_arm(ArmSpec(model="panda", tool_offset={"translation": ["0 cm", "0 cm", "1 cm"]}))
+    message = str(refused.value)
+    assert message.startswith("manipulator.arm.tool_offset: finger joint 'panda_finger_joint1'")
+    assert message.endswith("(it replaces the built-in panda's own hand offset)")
+    assert "panda.urdf" not in message
+    # the built-in's own offset given explicitly is the built-in arm
+    given = load_arm(
+        ArmSpec(
+            model="panda",
+            tool_offset={
+                "translation": ["0 cm", "0 cm", "10.365 cm"],
+                "rotation": [{"z": "90 deg"}],
+            },
+        )
+    )
+    q = np.array([0.1, -0.4, 0.2, -2.0, 0.1, 1.7, 0.6])
+    assert _pose_error(given.forward(q), arm.forward(q)) < 1e-12
 
 
 @pytest.mark.parametrize("opening", [0.01, 0.03, 0.07])

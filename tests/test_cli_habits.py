@@ -5,6 +5,7 @@ references behind ``--verbose``)."""
 from __future__ import annotations
 
 import io
+import json
 import re
 import subprocess
 import sys
@@ -53,16 +54,16 @@ def test_help_lists_the_exit_codes(capsys: pytest.CaptureFixture[str]) -> None:
         assert re.search(rf"^\s+{code}\s+\S", block, re.MULTILINE), code
 
 
-def test_plan_to_stdout_writes_only_the_program(tmp_path: Path) -> None:
-    done = subprocess.run(
-        [*SYNTH, "plan", str(SEED_TASK), "--proof-trials", "0", "-o", "-"],
-        capture_output=True,
-        text=True,
-        cwd=tmp_path,
-        check=False,
-    )
+def _to_stdout(argv: list[str], where: Path) -> subprocess.CompletedProcess[str]:
+    """``synth argv`` run in ``where``, exit 0, and no file named ``-`` written there."""
+    done = subprocess.run([*SYNTH, *argv], capture_output=True, text=True, cwd=where, check=False)
     assert done.returncode == 0, done.stderr
-    assert not (tmp_path / "-").exists()
+    assert not (where / "-").exists()
+    return done
+
+
+def test_plan_to_stdout_writes_only_the_program(tmp_path: Path) -> None:
+    done = _to_stdout(["plan", str(SEED_TASK), "--proof-trials", "0", "-o", "-"], tmp_path)
     parse_program(done.stdout)
     assert done.stdout == SEED_PROGRAM.read_text(encoding="utf-8")
     assert "Decisions:" in done.stderr and "Decisions:" not in done.stdout
@@ -184,3 +185,93 @@ def test_a_seed_outside_32_bits_is_a_usage_error(
         assert f"argument --seed: a seed is 0 to 4294967295, got {seed}" in (
             capsys.readouterr().err
         )
+
+
+@pytest.mark.parametrize("option", ["--trace", "--svg", "--export-trajectory"])
+def test_replay_outputs_are_checked_before_the_replay(
+    option: str,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # A Monte Carlo study of minutes must not end in "cannot write": the path is refused before
+    # the program is even read, naming its option, and nothing is made
+    import synth.cli.replay
+
+    def no_work(_path: str) -> str:
+        raise AssertionError("read the program before checking the output path")
+
+    monkeypatch.setattr(synth.cli.replay, "read_program", no_work)
+    blocker = tmp_path / "file"
+    blocker.write_text("x", encoding="utf-8")
+    suffix = {"--trace": "t.json", "--svg": "p.svg", "--export-trajectory": "t.csv"}[option]
+    target = blocker / suffix
+    argv = ["replay", str(SEED_PROGRAM), "--task", str(SEED_TASK), "--trials", "5"]
+    assert main([*argv, option, str(target)]) == EXIT_USAGE
+    assert capsys.readouterr().err == (
+        f"synth replay: error: {option} {target}: {blocker} is not a directory\n"
+    )
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]
+
+
+def test_an_output_that_is_an_input_is_refused_and_the_input_kept(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # `synth plan task.yaml -o task.yaml` replaced the task with the program, exit 0 (the
+    # fourth hunt); the same file under another name is the same file
+    task = tmp_path / "task.yaml"
+    program = tmp_path / "prog.al"
+    task.write_bytes(SEED_TASK.read_bytes())
+    program.write_bytes(SEED_PROGRAM.read_bytes())
+    other_name = tmp_path / "sub" / ".." / "task.yaml"
+    (tmp_path / "sub").mkdir()
+    for argv, option, path, kind in [
+        (["plan", str(task), "-o"], "--output", other_name, "the task file"),
+        (
+            ["replay", str(program), "--task", str(task), "--trace"],
+            "--trace",
+            program,
+            "the program file",
+        ),
+        (
+            ["replay", str(program), "--task", str(task), "--export-trajectory"],
+            "--export-trajectory",
+            task,
+            "the task file",
+        ),
+        (["view", str(task), str(program), "-o"], "--output", program, "the program file"),
+    ]:
+        assert main([*argv, str(path)]) == EXIT_USAGE
+        assert capsys.readouterr().err.endswith(
+            f"error: {option} {path}: is {kind}; writing it would destroy it\n"
+        )
+    assert task.read_bytes() == SEED_TASK.read_bytes()
+    assert program.read_bytes() == SEED_PROGRAM.read_bytes()
+
+
+@pytest.mark.parametrize("one", [False, True], ids=["monte-carlo", "trial"])
+def test_replay_trace_to_stdout_writes_only_the_trace(one: bool, tmp_path: Path) -> None:
+    # `--trace -` wrote the trace and then the report to standard output: not JSON (the fourth
+    # hunt). The report goes to standard error, as plan -o - does.
+    runs = ["--trial", "2"] if one else ["--trials", "3"]
+    argv = ["replay", str(SEED_PROGRAM), "--task", str(SEED_TASK), *runs, "--trace", "-"]
+    done = _to_stdout(argv, tmp_path)
+    trace = json.loads(done.stdout)
+    assert trace["outcome"]["outcome"] == "success" and trace["joints"]
+    assert "success" in done.stderr and "written to" not in done.stderr
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--svg", "-"], "--svg -: the picture's format comes from the file's name"),
+        (["--export-trajectory", "-"], "--export-trajectory -: the format comes from the file's"),
+        (["--json", "--trace", "-"], "--json and --trace - both write to standard output"),
+    ],
+)
+def test_replay_outputs_that_cannot_share_stdout_are_refused(
+    argv: list[str], message: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    base = ["replay", str(SEED_PROGRAM), "--task", str(SEED_TASK), "--trials", "2"]
+    assert main([*base, *argv]) == EXIT_USAGE
+    assert capsys.readouterr().err.startswith(f"synth replay: error: {message}")

@@ -48,13 +48,27 @@ def test_plan_without_preamble_json_program_is_the_bare_program(
 
 
 def test_plan_output_that_cannot_be_written_is_a_clean_error(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
+    # Refused before any work (a plan with its proof takes seconds to minutes; Hunt A found the
+    # path checked only after it): synthesize is never called, and nothing is made
+    import synth.pipeline
+
+    def no_work(*_args: object, **_kwargs: object) -> None:
+        raise AssertionError("planned before checking the output path")
+
+    monkeypatch.setattr(synth.pipeline, "synthesize", no_work)
     blocker = tmp_path / "file"
     blocker.write_text("x", encoding="utf-8")
-    assert (
-        main(["plan", str(SEED_TASK), "--proof-trials", "0", "-o", str(blocker / "sub" / "p.al")])
-        == 2
-    )
+    target = blocker / "sub" / "p.al"
+    assert main(["plan", str(SEED_TASK), "-o", str(target)]) == 2
     err = capsys.readouterr().err
-    assert err.startswith("synth plan: error: cannot write") and "Traceback" not in err
+    assert err == f"synth plan: error: --output {target}: {blocker} is not a directory\n"
+    assert main(["plan", str(SEED_TASK), "--svg", str(tmp_path)]) == 2
+    assert capsys.readouterr().err == f"synth plan: error: --svg {tmp_path}: is a directory\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]
+    # a path under directories still to be made is fine: they are made at the end
+    monkeypatch.undo()
+    made = tmp_path / "a" / "b" / "p.al"
+    assert main(["plan", str(SEED_TASK), "--proof-trials", "0", "-o", str(made)]) == 0
+    assert made.read_text(encoding="utf-8") == (GOLDEN / "seed_4_8.al").read_text(encoding="utf-8")

@@ -72,3 +72,15 @@ def test_a_close_that_times_out_is_a_warning_not_an_internal_error(
         "the Dask client did not close cleanly (TimeoutError: timed out after 30 s)",
         "the Dask local cluster did not close cleanly (TimeoutError: timed out after 30 s)",
     ]
+
+
+@pytest.mark.parametrize("address", ["bogus", "", "tcp://", "foo://x:1", "tcp://[::1"])
+def test_a_malformed_scheduler_address_is_a_usage_error(
+    address: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # distributed's address parser raises ValueError: that was exit 70, an internal error
+    argv = ["replay", str(SEED_SEARCH), "--task", str(SEED_TASK), "--trials", "2"]
+    assert main([*argv, "--dask", address]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"synth replay: error: --dask {address!r}: not a scheduler address (")
+    assert err.rstrip().endswith("write HOST:PORT, tcp://HOST:PORT, or local")

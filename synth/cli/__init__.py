@@ -66,6 +66,7 @@ from synth.cli.commands import (
     add_serve_parser,
     add_view_parser,
 )
+from synth.cli.files import check_outputs
 from synth.cli.plan import add_plan_parser
 from synth.cli.replay import add_replay_parser
 from synth.exceptions import SynthError
@@ -123,6 +124,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     func: Command = args.func
     try:
+        check_outputs(args)
         return func(args)
     except SynthError as exc:
         print(f"synth {args.command}: error: {exc}", file=sys.stderr)

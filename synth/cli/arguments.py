@@ -27,7 +27,8 @@ EXIT_CODES_HELP = f"""exit codes:
   {EXIT_REPLAY_FAILED}   synth replay: the program's nominal run failed (abort, violation, pin
       not seated)
   {EXIT_USAGE}   unusable input or a refusal: bad arguments, an invalid task or program, no
-      strategy proven (synth plan), an AL runtime error (synth replay)
+      strategy proven (synth plan), an AL runtime error (synth replay), an output
+      file that could not be written (checked before any work)
   {EXIT_INTERNAL}  internal error (SYNTH_DEBUG=1 prints the traceback)
   {EXIT_INTERRUPTED} interrupted
   {EXIT_BROKEN_PIPE} the reader of standard output closed it (e.g. `| head`)"""
@@ -75,6 +76,11 @@ def resolve_workers(value: int | None, *, stream: TextIO | None = None) -> int:
 
 def picture_format(path: str) -> Literal["svg", "png"]:
     """The format a picture's file name asks for; a usage error unless ``.svg`` or ``.png``."""
+    if path == "-":
+        raise SynthError(
+            "--svg -: the picture's format comes from the file's name (.svg or .png); give a "
+            "file name, not standard output"
+        )
     lower = path.lower()
     if lower.endswith(".svg"):
         return "svg"

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
@@ -30,6 +31,76 @@ def write_output(path: str, data: bytes) -> None:
         out.write_bytes(data)
     except OSError as exc:
         raise SynthError(f"cannot write {out}: {exc.strerror or exc}") from None
+
+
+OUTPUT_OPTIONS = {
+    "output": "--output",
+    "svg": "--svg",
+    "trace": "--trace",
+    "export_trajectory": "--export-trajectory",
+}
+"""The command line's output files: the argument's name and its option."""
+
+
+INPUT_ARGUMENTS = {"task": "the task file", "program": "the program file"}
+"""The command line's input files: the argument's name and how a message calls it."""
+
+
+def check_outputs(args: object) -> None:
+    """:func:`check_writable` of every output the command was given, and none an input.
+
+    ``synth plan task.yaml -o task.yaml`` replaced the task with the program, and ``--trace
+    prog.al`` the program just replayed with its trace, without a word (the fourth hunt).
+    """
+    inputs = {
+        name: path
+        for name in INPUT_ARGUMENTS
+        if isinstance(path := getattr(args, name, None), str) and path != "-"
+    }
+    for name, option in OUTPUT_OPTIONS.items():
+        path = getattr(args, name, None)
+        if not isinstance(path, str):
+            continue
+        check_writable(option, path)
+        for kind, given in inputs.items():
+            if _same_file(path, given):
+                raise SynthError(
+                    f"{option} {path}: is {INPUT_ARGUMENTS[kind]}; writing it would destroy it"
+                )
+
+
+def _same_file(a: str, b: str) -> bool:
+    """Whether two paths name one existing file (a missing input is its reader's to report)."""
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+def check_writable(option: str, path: str) -> None:
+    """A usage error, before any work, when ``path`` could not be written at the end.
+
+    Nothing is made or changed: the file must be a writable file or absent, and its nearest
+    existing ancestor a directory this process may write into (:func:`write_output` then makes
+    the directories between). A planning run or a Monte Carlo study of minutes then fails in
+    a moment, not after its work.
+    """
+    if path == "-":
+        return
+    out = Path(path)
+    if out.is_dir():
+        raise SynthError(f"{option} {path}: is a directory")
+    if out.exists():
+        if not os.access(out, os.W_OK):
+            raise SynthError(f"{option} {path}: cannot write the file (permission denied)")
+        return
+    ancestor = out.absolute().parent
+    while not ancestor.exists():
+        ancestor = ancestor.parent
+    if not ancestor.is_dir():
+        raise SynthError(f"{option} {path}: {ancestor} is not a directory")
+    if not os.access(ancestor, os.W_OK | os.X_OK):
+        raise SynthError(f"{option} {path}: cannot write into {ancestor} (permission denied)")
 
 
 def read_program(path: str) -> str:

@@ -75,6 +75,13 @@ def _cmd_replay(args: argparse.Namespace) -> int:
             "--export-trajectory writes the nominal run's motion; --trial I re-runs a trial "
             "(--trace records the trial)"
         )
+    if args.export_trajectory == "-":
+        raise SynthError(
+            "--export-trajectory -: the format comes from the file's name (.yaml or .csv); give "
+            "a file name, not standard output"
+        )
+    if args.trace == "-" and args.json:
+        raise SynthError("--json and --trace - both write to standard output: give --trace a file")
     export = args.export_trajectory
     if export is not None and not export.lower().endswith((".yaml", ".yml", ".csv")):
         raise SynthError(f"--export-trajectory {export}: the file must end in .yaml or .csv")
@@ -83,7 +90,7 @@ def _cmd_replay(args: argparse.Namespace) -> int:
         if args.trace is not None:
             _write_trace(args, text)
         status = _run_one(args, text)
-        if args.trace is not None:
+        if args.trace is not None and args.trace != "-":
             print(
                 f"trace of trial {args.trial} written to {args.trace}",
                 file=sys.stderr if args.json else sys.stdout,
@@ -94,7 +101,9 @@ def _cmd_replay(args: argparse.Namespace) -> int:
 
     show = args.trials >= BAR_MIN_TRIALS and (args.progress or sys.stderr.isatty())
     bar = ProgressBar(sys.stderr) if show else None
-    records = _TrialOutput(sys.stdout, args.failures, stream_json=args.json)
+    # with the trace on standard output the report goes to standard error, as plan -o - does
+    report_to = sys.stderr if args.trace == "-" else sys.stdout
+    records = _TrialOutput(report_to, args.failures, stream_json=args.json)
     with contextlib.ExitStack() as stack:
         client = None
         if args.dask is not None and args.trials:
@@ -114,14 +123,17 @@ def _cmd_replay(args: argparse.Namespace) -> int:
             document["min_success"] = {"required": args.min_success, "rate": rate, "met": not below}
         records.finish(document)
     else:
-        print(replay_summary(report))
+        print(replay_summary(report), file=report_to)
         if args.distribution is not None and args.trials:
-            print(f"  errors: every block sampled {args.distribution} (--distribution)")
+            print(
+                f"  errors: every block sampled {args.distribution} (--distribution)",
+                file=report_to,
+            )
         records.print_failures()
         if args.svg is not None:
-            print(f"Monte Carlo picture written to {args.svg}")
-        if args.trace is not None:
-            print(f"trace of the nominal run written to {args.trace}")
+            print(f"Monte Carlo picture written to {args.svg}", file=report_to)
+        if args.trace is not None and args.trace != "-":
+            print(f"trace of the nominal run written to {args.trace}", file=report_to)
     if args.export_trajectory is not None:
         _export(args, text, report)
     if report.interrupted:
@@ -197,8 +209,11 @@ def _run_one(args: argparse.Namespace, text: str) -> int:
     if args.json:
         print(json.dumps(record.to_json(), indent=2))
     else:
-        print(f"replay {args.program}: trial {args.trial} of seed {args.seed} alone")
-        print(trial_text(record))
+        report_to = sys.stderr if args.trace == "-" else sys.stdout
+        print(
+            f"replay {args.program}: trial {args.trial} of seed {args.seed} alone", file=report_to
+        )
+        print(trial_text(record), file=report_to)
     if record.run.success:
         return 0
     return 2 if record.run.outcome == "error" else 1

@@ -169,8 +169,19 @@ def dask_client(address: str, workers: int) -> Generator[Any, None, None]:
         finally:
             _close(client, cluster)
         return
+
+    def malformed(why: object) -> SynthError:
+        return SynthError(
+            f"--dask {address!r}: not a scheduler address ({why}); write HOST:PORT, "
+            "tcp://HOST:PORT, or local"
+        )
+
+    if not address.strip():  # Client('') falls back on Dask's configured default
+        raise malformed("empty")
     try:
         client = Client(address, timeout=CONNECT_TIMEOUT_S)
+    except ValueError as exc:  # distributed's address parser: 'bogus', 'foo://x:1'
+        raise malformed(exc) from None
     except (OSError, TimeoutError) as exc:
         raise SynthError(f"--dask {address}: cannot reach the scheduler ({exc})") from None
     try:

@@ -223,16 +223,25 @@ def load_arm(
             "manipulator.hand",
         )
     if arm_spec.model in BUILTIN_ARMS:
-        arm = load_builtin_arm(
-            arm_spec.model,
-            hand_spec,
-            world_from_base=base,
-            tool_frame=arm_spec.tool_frame,
-            tool_offset=given_offset,
-            velocity=arm_spec.velocity_limits,
-            acceleration=arm_spec.acceleration_limits,
-            jerk=arm_spec.jerk_limits,
-        )
+        try:
+            arm = load_builtin_arm(
+                arm_spec.model,
+                hand_spec,
+                world_from_base=base,
+                tool_frame=arm_spec.tool_frame,
+                tool_offset=given_offset,
+                velocity=arm_spec.velocity_limits,
+                acceleration=arm_spec.acceleration_limits,
+                jerk=arm_spec.jerk_limits,
+            )
+        except ArmModelError as error:
+            if not error.field:
+                raise
+            # the package's file is not the task's fault: the field the task gave is
+            detail = error.message.removeprefix(f"{error.source}: ")
+            if error.field == "tool_offset":
+                detail += f" (it replaces the built-in {arm_spec.model}'s own hand offset)"
+            raise ArmModelError(detail, f"manipulator.arm.{error.field}") from None
         check_rates(arm_spec, arm.limits)
         return arm
     if arm_spec.model == "stanford":
