@@ -171,6 +171,8 @@ def test_dimension_errors(text: str, fragment: str) -> None:
 # --------------------------------------------------------------------------------------------
 # Values: the operator type table
 
+E200 = "1" + "0" * 200
+"""10²⁰⁰: AL numbers have no exponent."""
 A_TEXT = "FRAME(ROT(ZHAT,90*DEG),VECTOR(1,2,3))"  # R_z(90°), (1, 2, 3) cm
 B_TEXT = "FRAME(NILROTN,VECTOR(2,2,3))"
 
@@ -272,6 +274,12 @@ def test_orient_displ_and_functions() -> None:
         ("NOT 1", "NOT needs a boolean"),
         ("TRUE AND 1", "AND needs two booleans"),
         ("1/0", "division by zero"),
+        # overflow is an error at its line as 1/0 is (the fourth hunt: 1e200*1e200 was inf,
+        # A − A NaN, and a NaN pose crashed the inverse kinematics with exit 70)
+        (f"{E200}*{E200}", "not a finite number"),
+        (f"({E200}*{E200}*CM) - ({E200}*{E200}*CM)", "not a finite number"),
+        (f"VECTOR({E200}, 0, 0)*{E200}", "not a finite number"),
+        (f"ROT(ZHAT, {E200}*{E200})", "not a finite number"),
         ("ROT(NILVECT, 1)", "non-zero"),
         ("INV(1)", "INV needs"),
         ("VECTOR(1,2)", "takes 3 arguments"),
@@ -989,3 +997,13 @@ def test_refined_hand_written_program() -> None:
     stopped_pin = H(np.eye(3), (45, 64, stop_z))
     assert close(park.targets[0], stopped_pin @ T_g @ T_a)
     assert close(park.targets[1], T_PARK)
+
+
+def test_a_huge_rotation_axis_keeps_its_direction() -> None:
+    # |(1e200, 0, 0)|² overflows; the axis was refused as "a zero vector" (the fourth hunt)
+    huge = ev(f"ROT(VECTOR({E200}, 0, 0), 30*DEG)")
+    unit = ev("ROT(XHAT, 30*DEG)")
+    assert isinstance(huge, V.Rotation) and isinstance(unit, V.Rotation)
+    assert np.allclose(huge.matrix, unit.matrix, atol=1e-15)
+    tiny = "0." + "0" * 12 + "1"  # 1e-13, below the 1e-12 a zero axis is told by
+    assert "non-zero" in al_error(f"\n  X ← ROT(VECTOR({tiny}, 0, 0), 1);").problem

@@ -198,6 +198,18 @@ def test_a_target_out_of_the_workspace_is_unreachable_at_its_line() -> None:
     assert report.nominal.line == 3 and "destination" in violation.detail
 
 
+@pytest.mark.parametrize("digits", [170, 180, 300])
+def test_a_target_astronomically_far_is_unreachable_not_a_crash(digits: int) -> None:
+    # 10^180 cm: the Stanford inverse squared it to infinity and crashed on a NaN angle, exit 70
+    # (the fourth hunt; 10^170 already was "unreachable"). No arm reaches a kilometre.
+    far = "1" + "0" * digits
+    text = f"MOVE BMANIP TO BPARK*TRANS(NILROTN,VECTOR(0,0,{far})*CM);\n"
+    report = replay_program(text, SEED_TASK)
+    (violation,) = report.nominal.violations
+    assert violation.kind == "unreachable" and violation.line == 1
+    assert "is out of the arm's reach" in violation.detail and f"e+{digits}" in violation.detail
+
+
 def test_a_kept_joint_path_replays_as_a_fresh_one() -> None:
     # Every trial's first MOVE commands the same targets from the park, so its joint path is
     # kept (synth.replay.machine._joint_path). A trial run with the kept paths must end exactly

@@ -56,8 +56,13 @@ def _want(name: str, value: Value, kind: type | tuple[type, ...], what: str) -> 
 def rotation_about(axis: ArrayLike, angle: float) -> Rotation:
     """Rotation by ``angle`` [rad] about ``axis`` (any non-zero vector; normalised)."""
     a = np.asarray(axis, dtype=float)
+    largest = float(np.max(np.abs(a)))
+    if not math.isfinite(largest):
+        raise OperandError("a rotation axis must be a finite vector")
+    if largest > 0.0:
+        a = a / largest  # |(1e200, 0, 0)|² overflows: its direction does not
     norm = float(np.linalg.norm(a))
-    if not math.isfinite(norm) or norm < 1e-12:
+    if norm * largest < 1e-12:
         raise OperandError("a rotation axis must be a non-zero vector")
     return Rotation(pin.exp3(a / norm * angle))
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import contextlib
 import itertools
+import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
@@ -30,6 +31,7 @@ from synth.al.values import (
     Exponents,
     OperandError,
     Pose,
+    Rotation,
     Scalar,
     Value,
     Vector,
@@ -64,9 +66,33 @@ class Evaluation:
 
     def _arithmetic(self, node: ast.Node, op: str, left: Value, right: Value) -> Value:
         try:
-            return binary(op, left, right)
+            with np.errstate(over="ignore", invalid="ignore"):  # _finite says it at its line
+                result = binary(op, left, right)
+            return self._finite(node, result)
         except OperandError as problem:
             raise self._error(node, str(problem)) from None
+
+    def _finite(self, node: ast.Node, value: Any) -> Any:
+        """``value``, or an AL runtime error at ``node`` when a number in it is not finite.
+
+        Floats overflow silently: ``1e200*1e200`` was infinity and ``A − A`` NaN, and a NaN pose
+        crashed the arm's inverse kinematics (the fourth hunt); ``1/0`` already was an error.
+        """
+        if isinstance(value, Scalar):
+            finite = math.isfinite(value.value)
+        elif isinstance(value, Vector):
+            # an inf or NaN entry makes the sum so (finite entries overflow it only near 1e308)
+            finite = math.isfinite(value.value.sum())
+        elif isinstance(value, Rotation):
+            finite = math.isfinite(value.matrix.sum())
+        elif isinstance(value, Pose):
+            se3 = value.se3
+            finite = math.isfinite(se3.translation.sum() + se3.rotation.sum())
+        else:
+            return value
+        if not finite:
+            raise self._error(node, "the result is not a finite number (the arithmetic overflowed)")
+        return value
 
     def _direction(self, call: ast.Call, cx: ProcessContext) -> tuple[float, float, float]:
         """The world unit direction of FORCE(v)/TORQUE(v); ``frame*v`` uses the rotation only."""
@@ -98,7 +124,9 @@ class Evaluation:
 
     def _apply(self, node: ast.Node, fn: Callable[[], Any]) -> Any:
         try:
-            return fn()
+            with np.errstate(over="ignore", invalid="ignore"):  # _finite says it at its line
+                result = fn()
+            return self._finite(node, result)
         except OperandError as problem:
             raise self._error(node, str(problem)) from None
 

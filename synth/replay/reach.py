@@ -50,13 +50,30 @@ class ReachProblem(Exception):
 
 def describe_pose(pose: pin.SE3) -> str:
     """``(x, y, z) cm, approach (ax, ay, az)``: a hand pose for messages."""
-    x, y, z = (100.0 * float(v) for v in pose.translation)
+    x, y, z = (_centimetres(float(v)) for v in pose.translation)
     a = pose.rotation[:, 2]
-    return f"({x:.2f}, {y:.2f}, {z:.2f}) cm, approach ({a[0]:.2f}, {a[1]:.2f}, {a[2]:.2f})"
+    return f"({x}, {y}, {z}) cm, approach ({a[0]:.2f}, {a[1]:.2f}, {a[2]:.2f})"
+
+
+def _centimetres(metres: float) -> str:
+    """``12.34``; past a kilometre, ``1.225e+169`` (a hundred and seventy digits say nothing)."""
+    cm = 100.0 * metres
+    return f"{cm:.2f}" if abs(cm) < 1e5 else f"{cm:.4g}"
+
+
+FAR = 1e3
+"""[m] No arm reaches a hand pose this far from its base: refused before the inverse
+kinematics, whose squares overflow to NaN near 1e154 m (an AL literal of 1e180 cm crashed the
+replay, the fourth hunt)."""
 
 
 def solve_near(arm: Arm, pose: pin.SE3, near: NDArray[np.float64]) -> NDArray[np.float64]:
     """The attainable configuration reaching ``pose`` nearest ``near``; ReachProblem if none."""
+    offset = pose.translation - arm.world_from_base.translation
+    if not (np.all(np.isfinite(pose.homogeneous)) and float(np.max(np.abs(offset))) < FAR):
+        raise ReachProblem(
+            "unreachable", f"the hand pose {describe_pose(pose)} is out of the arm's reach"
+        )
     q = nearest_solution(arm, arm.inverse(pose, hint=near), near)
     if q is not None:
         return q
