@@ -266,3 +266,49 @@ def test_the_seated_hand_keeps_the_holes_error_from_a_wall(monkeypatch) -> None:
     assert planned.strategy.name != unchecked.name
     context = replay_context(emit_program(planned.strategy, believed_graph(spec)), spec)
     assert run_trial(context, 3, 46).outcome == "success"
+
+
+def test_the_palm_keeps_the_grip_from_the_part_when_the_fingers_open(
+    monkeypatch: pytest.MonkeyPatch, tmp_path
+) -> None:
+    # The fourth hunt's thin pin (tests/data/tasks/thin_pin_palm_beside.yaml): at γ = 100°,
+    # φ = 315° the palm opened 0.25 cm from PLATE, clear of it with the plate turned ±2° about
+    # the seat; but the pin sits in the hand off the nominal grip (the pickup's hand error,
+    # less CENTER's x), and in trial 125 of seed 11, the plate raised to its tolerance's edge
+    # (x ≥ 0.09 in, y ≤ −0.09 in, turned ≥ 1.8°), the palm hit it (6 of 300 such worlds). The
+    # palm and fingers now keep the grip at the let-go: 0.35 cm needed, that φ refused.
+    import yaml
+
+    task = DATA_TASKS / "thin_pin_palm_beside.yaml"
+    spec = load_task(task)
+    data = yaml.safe_load(task.read_text(encoding="utf-8"))
+    data["frames"][0]["uncertainty"]["constraints"] = [
+        {"terms": {"x": 1}, "min": "0.09 in"},
+        {"terms": {"y": 1}, "max": "-0.09 in"},
+        {"terms": {"rz": 1}, "min": "1.8 deg"},
+    ]
+    edge_path = tmp_path / "edge.yaml"
+    edge_path.write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
+    edge = load_task(edge_path)
+
+    planned = plan_task(spec)
+    reasons = {r.candidate: r.reason for r in planned.rejected}
+    refused = "ω=270° γ=100° d=2.27 cm φ=315°"
+    assert "the let-go in BH1 sweeps palm into PLATE" in reasons[refused]
+    assert "0.35 cm are needed" in reasons[refused]
+
+    of = GrossMotionCheck.of
+
+    def without_hand_grip(*args: object, **kwargs: object) -> GrossMotionCheck:
+        check = of(*args, **kwargs)  # type: ignore[arg-type]
+        check.hand_radii.clear()
+        return check
+
+    monkeypatch.setattr(GrossMotionCheck, "of", staticmethod(without_hand_grip))
+    unchecked = plan_task(spec).strategy
+    monkeypatch.undo()
+    assert unchecked.name == refused
+    hit = run_trial(replay_context(emit_program(unchecked, believed_graph(spec)), edge), 11, 125)
+    assert hit.outcome == "violation" and "opening the fingers: palm hit PLATE" in hit.message
+    program = emit_program(planned.strategy, believed_graph(spec))
+    assert run_trial(replay_context(program, edge), 11, 125).outcome == "success"
