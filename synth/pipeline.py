@@ -315,11 +315,16 @@ MAX_SEQUENCE_ATTEMPTS = 4
 strategy and the sequence is planned again."""
 
 
-def _step_check(base_dir: Path | None, banned: dict[int, dict[str, str | None]]) -> StepCheck:
+def _step_check(
+    base_dir: Path | None,
+    banned: dict[int, dict[str, str | None]],
+    failures: dict[tuple[int, str], str] | None = None,
+) -> StepCheck:
     """Accept a step's strategy by the nominal replay of its program; return where it ends.
 
     Strategies in ``banned[step]`` failed a proof of the whole sequence and are refused, with
-    the belief that proof refuted (:func:`_refuted`).
+    the belief that proof refuted (:func:`_refuted`) and how it failed (``failures``, the
+    proof's reason: its first failing trial, line and sampled errors).
     """
 
     def check(
@@ -331,6 +336,9 @@ def _step_check(base_dir: Path | None, banned: dict[int, dict[str, str | None]])
         refused = banned.get(index, {})
         if strategy.name in refused:
             reason = "the sequence holding it failed its replay proof in this step"
+            why = (failures or {}).get((index, strategy.name))
+            if why:
+                reason = f"{reason} ({why})"
             rejection = Rejection(
                 strategy.name, reason, cause="proof", stage="proof", refuted=refused[strategy.name]
             )
@@ -421,6 +429,7 @@ def _synthesize_sequence(
     proof_options = opts.proof or ProofOptions.for_task(spec)
     graph = believed_graph(spec)
     banned: dict[int, dict[str, str | None]] = {}
+    failures: dict[tuple[int, str], str] = {}
     attempts: list[CandidateProof] = []
     plan_options = opts.plan
     fallback: SequenceSynthesis | None = None  # proven, but a step's search missed by gaps
@@ -429,7 +438,7 @@ def _synthesize_sequence(
             try:
                 sequence = plan_sequence(
                     spec,
-                    _step_check(where, banned),
+                    _step_check(where, banned, failures),
                     options=plan_options,
                     base_dir=where,
                     reuse=opts.reuse,
@@ -476,6 +485,7 @@ def _synthesize_sequence(
                 break
             refuted = _refuted(proof, step.strategy)
             banned.setdefault(step.index, {})[step.strategy.name] = refuted
+            failures[step.index, step.strategy.name] = proof.reason()
             if refuted == "dr_ok":  # a miss: every step's search at its parts' lead from now on
                 plan_options = dataclasses.replace(plan_options, at_lead=True)
     if fallback is not None:

@@ -517,3 +517,53 @@ def test_a_part_located_by_contacts_is_corrected_from_its_seat():
     chosen = synthesize(task, SynthesisOptions(proof=ProofOptions(trials=20, workers=1)))
     assert isinstance(chosen, SequenceSynthesis)
     assert "BOX CORRECTED BY THE MEASURED OFFSET (ALONG X)" in chosen.program
+
+
+def test_a_step_refused_after_a_failed_proof_says_how_the_proof_failed() -> None:
+    # A sequence refused for its proof said only "the sequence holding it failed its replay
+    # proof in this step": the failing trial, its line and sampled errors were dropped when
+    # the re-plan found nothing else (the fourth hunt, four pins on the Panda). The proof's
+    # reason rides with the ban.
+    from synth.strategies import plan_task
+
+    spec = load_task(SEED_TASK)
+    strategy = plan_task(spec).strategy
+    why = "replay proof failed: 97 of 100 trials succeeded; first failure trial 7: abort at line 60"
+    check = _step_check(TASKS, {1: {strategy.name: None}}, {(1, strategy.name): why})
+    rejection, where = check(1, spec, None, strategy)
+    assert where is None and isinstance(rejection, Rejection)
+    assert rejection.reason == (
+        f"the sequence holding it failed its replay proof in this step ({why})"
+    )
+    assert rejection.cause == "proof"
+    # a step the proof did not fail is checked by its nominal replay as before
+    rejection, where = _step_check(TASKS, {})(1, spec, None, strategy)
+    assert rejection is None and where is not None
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "message"),
+    [("d_f", 1.71, "has no unit"), ("foo", 2, "unknown field")],
+)
+def test_a_plain_list_of_steps_names_the_step_and_its_line(
+    field: str, value: object, message: str
+) -> None:
+    # A plain list means {order: fixed, steps: [...]}: a fault in a step was reported at the
+    # line of `insertions:` and under insertions.steps[1], a path not in the file (the fourth
+    # hunt: line 104 for a unit missing on line 117)
+    import yaml
+
+    data = yaml.safe_load((TASKS / "seed_box_two_pins.yaml").read_text(encoding="utf-8"))
+    data["insertions"] = data["insertions"]["steps"]
+    assert parse_task(yaml.safe_dump(data, sort_keys=False)).insertions is not None
+    data["insertions"][1][field] = value
+    text = yaml.safe_dump(data, sort_keys=False)
+    lines = text.splitlines()
+    second = next(n for n, t in enumerate(lines, 1) if t.strip() == "- pin: PIN2")
+    line = next(
+        n for n, t in enumerate(lines, 1) if n > second and t.strip() == f"{field}: {value}"
+    )
+    with pytest.raises(SpecError) as refused:
+        parse_task(text)
+    assert refused.value.path == f"insertions[1].{field}" and refused.value.line == line
+    assert message in refused.value.message

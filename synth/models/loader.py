@@ -81,17 +81,36 @@ def parse_task(
 
 def validate_task(data: dict[str, Any], lines: dict[PathKey, int] | None = None) -> TaskSpec:
     """Validate an already-parsed mapping (e.g. a JSON request body) into a :class:`TaskSpec`."""
-    lines = lines or {}
+    lines = _plain_steps_lines(data, lines or {})
     try:
         spec = TaskSpec.model_validate(data)
     except ValidationError as exc:
         err = _first_error(exc.errors(include_url=False))
         loc = _strip_union_tags(err["loc"])
         message = _message(err)
-        raise SpecError(format_path(loc), message, line_of(loc, lines)) from None
+        line = line_of(loc, lines)
+        if isinstance(data.get("insertions"), list) and loc[:2] == ("insertions", "steps"):
+            loc = ("insertions", *loc[2:])  # the path as written: a plain list of steps
+        raise SpecError(format_path(loc), message, line) from None
     check_task(spec, lines)
     spec.remember_lines(lines)
     return spec
+
+
+def _plain_steps_lines(data: dict[str, Any], lines: dict[PathKey, int]) -> dict[PathKey, int]:
+    """``lines`` with ``insertions.steps[i]…`` for a plain list of steps, ``insertions[i]…``.
+
+    A plain list means ``{order: fixed, steps: [...]}`` (:class:`SequenceSpec`), and every
+    field of its steps is checked under ``steps``: without these, a step's fault was put at
+    the line of ``insertions:`` (the fourth hunt: line 104 for a unit missing on line 117).
+    """
+    if not isinstance(data.get("insertions"), list):
+        return lines
+    aliased = dict(lines)
+    for key, line in lines.items():
+        if len(key) > 1 and key[0] == "insertions" and isinstance(key[1], int):
+            aliased[("insertions", "steps", *key[1:])] = line
+    return aliased
 
 
 def check_task(spec: TaskSpec, lines: dict[PathKey, int] | None = None) -> None:
