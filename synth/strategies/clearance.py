@@ -216,7 +216,6 @@ class GrossMotionCheck:
     solid_frames: dict[str, str] = field(default_factory=dict)
     hand_error: Uncertainty | None = None
     wrist_radii: dict[str, float] = field(default_factory=dict)
-    hand_radii: dict[str, float] = field(default_factory=dict)
     _scenes: dict[tuple[object, ...], CollisionScene] = field(default_factory=dict)
 
     @staticmethod
@@ -254,7 +253,6 @@ class GrossMotionCheck:
                 solids[obstacle.name] = solid_displacement(graph, frame, obstacle.geometry)
         moving: dict[str, float] = {}  # the arm's bodies near the hand, and the held pin
         radii: dict[str, float] = {}  # the wrist links' balls about the hand's origin
-        hand_radii: dict[str, float] = {}  # the palm's and the fingers'
         if hand_error is not None:
             probe = CollisionScene(
                 arm,
@@ -270,8 +268,6 @@ class GrossMotionCheck:
                     moving[body.name] = link_margin(hand_error, radius)
                     if body.role not in ("hand", "held"):
                         radii[body.name] = radius
-                    elif body.role == "hand":
-                        hand_radii[body.name] = radius
         standing = solid_displacement(graph, pin_frame, pin_standing.geometry)
         arm_only = {name: m for name, m in moving.items() if name != carried.name}
         rigid = frozenset([*(b.name for b in arm.bodies), carried.name])
@@ -290,7 +286,6 @@ class GrossMotionCheck:
             solid_frames=solid_frames,
             hand_error=hand_error,
             wrist_radii=radii,
-            hand_radii=hand_radii,
         )
 
     def part_of(self, graph: AttributeGraph, frame: str) -> str | None:
@@ -350,21 +345,12 @@ class GrossMotionCheck:
         it than believed in 0.5–2 % of the replay's worlds, and the proof passed 198 of 200.
         A solid that shares an uncertain link with the part (what stands on it, a fixture
         that holds it) moves with the hole as well and keeps its own margin only.
-
-        The palm and the fingers keep the grip from everything too: the let-go opens them with
-        nothing to feel, where an insertion or a search stops on their touch. A γ = 100° palm
-        hanging 0.4 cm below a plate's face, planned clear of its corner with the plate turned
-        ±2° about the seat, hit it in 6 of 300 worlds at that turn's edge (the fourth hunt):
-        the pin sat in the hand off the nominal grip.
         """
         options = self.fine_options(part, seated_hand)
         part_frame = None if part is None else self.solid_frames.get(part)
         shared = set() if part_frame is None else _uncertain_links(graph, part_frame)
         displacements = dict(options.displacements)
         grip = self._grip(seated_hand)
-        if grip is not None:
-            for name, radius in self.hand_radii.items():
-                displacements[name] = Displacement((replace(grip, radius=radius),))
         hand = (seat,) if grip is None else (seat, replace(grip, angles=np.zeros(3)))
         for obstacle in self.solids:
             name = obstacle.name
