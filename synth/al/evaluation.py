@@ -66,7 +66,11 @@ class Evaluation:
 
     def _arithmetic(self, node: ast.Node, op: str, left: Value, right: Value) -> Value:
         try:
-            with np.errstate(over="ignore", invalid="ignore"):  # _finite says it at its line
+            if isinstance(left, Vector) or isinstance(right, Vector):
+                # numpy warns of an overflow; _finite says it, at its line
+                with np.errstate(over="ignore", invalid="ignore"):
+                    result = binary(op, left, right)
+            else:
                 result = binary(op, left, right)
             return self._finite(node, result)
         except OperandError as problem:
@@ -85,10 +89,7 @@ class Evaluation:
             finite = math.isfinite(value.value.sum())
         elif isinstance(value, Rotation):
             finite = math.isfinite(value.matrix.sum())
-        elif isinstance(value, Pose):
-            se3 = value.se3
-            finite = math.isfinite(se3.translation.sum() + se3.rotation.sum())
-        else:
+        else:  # a frame or trans of finite parts (the motion refuses one a kilometre away)
             return value
         if not finite:
             raise self._error(node, "the result is not a finite number (the arithmetic overflowed)")
@@ -124,9 +125,7 @@ class Evaluation:
 
     def _apply(self, node: ast.Node, fn: Callable[[], Any]) -> Any:
         try:
-            with np.errstate(over="ignore", invalid="ignore"):  # _finite says it at its line
-                result = fn()
-            return self._finite(node, result)
+            return self._finite(node, fn())
         except OperandError as problem:
             raise self._error(node, str(problem)) from None
 
