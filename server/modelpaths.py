@@ -67,7 +67,20 @@ def resolve_model_file(
 
 
 def confine_model_files(spec: TaskSpec, model_dirs: Sequence[Path]) -> TaskSpec:
-    """``spec`` with its URDF, SRDF and package paths replaced by checked absolute paths."""
+    """``spec`` with its URDF, SRDF and package paths replaced by checked absolute paths.
+
+    A refusal carries the field's line in the posted YAML, as every other spec refusal does
+    (it had ``"line": null``, the fourth hunt).
+    """
+    try:
+        return _confined(spec, model_dirs)
+    except SpecError as error:
+        if error.line is not None:
+            raise
+        raise SpecError(error.path, error.detail, spec.line_of(error.path)) from None
+
+
+def _confined(spec: TaskSpec, model_dirs: Sequence[Path]) -> TaskSpec:
     if spec.manipulator is None:
         return spec
     arm = spec.manipulator.arm

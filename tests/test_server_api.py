@@ -237,9 +237,13 @@ def _urdf_spec(urdf: str) -> str:
 
 
 def test_urdf_reference_is_refused_without_model_dirs(client: TestClient) -> None:
-    body = problem(client.post("/v1/plans", content=_urdf_spec("arm.urdf"), headers=YAML), 422)
+    text = _urdf_spec("arm.urdf")
+    body = problem(client.post("/v1/plans", content=text, headers=YAML), 422)
     assert body["path"] == "manipulator.arm.urdf"
     assert "model directories" in str(body["detail"])
+    # the field's line in the posted YAML, as every spec refusal gives (it was null)
+    line = next(n for n, t in enumerate(text.splitlines(), 1) if t.strip().startswith("urdf:"))
+    assert body["line"] == line
 
 
 @pytest.mark.parametrize("reference", ["../secret.urdf", "/etc/passwd", "link.urdf"])
