@@ -101,8 +101,7 @@ def _cmd_replay(args: argparse.Namespace) -> int:
 
     show = args.trials >= BAR_MIN_TRIALS and (args.progress or sys.stderr.isatty())
     bar = ProgressBar(sys.stderr) if show else None
-    # with the trace on standard output the report goes to standard error, as plan -o - does
-    report_to = sys.stderr if args.trace == "-" else sys.stdout
+    report_to = _report_stream(args)
     records = _TrialOutput(report_to, args.failures, stream_json=args.json)
     with contextlib.ExitStack() as stack:
         client = None
@@ -193,6 +192,14 @@ def _check_diagnostics(args: argparse.Namespace) -> None:
         args.trials = DEFAULT_TRIALS
 
 
+def _report_stream(args: argparse.Namespace) -> TextIO:
+    """Where the text report goes: standard error when ``--trace -`` takes standard output.
+
+    As ``plan -o -`` sends its summary there.
+    """
+    return sys.stderr if args.trace == "-" else sys.stdout
+
+
 def _run_one(args: argparse.Namespace, text: str) -> int:
     """``--trial I``: trial I alone; exit 0 if it succeeds, 2 for an AL error, else 1."""
     from synth.replay.run import replay_one
@@ -209,7 +216,7 @@ def _run_one(args: argparse.Namespace, text: str) -> int:
     if args.json:
         print(json.dumps(record.to_json(), indent=2))
     else:
-        report_to = sys.stderr if args.trace == "-" else sys.stdout
+        report_to = _report_stream(args)
         print(
             f"replay {args.program}: trial {args.trial} of seed {args.seed} alone", file=report_to
         )
