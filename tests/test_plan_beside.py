@@ -143,7 +143,8 @@ def test_a_urdf_hands_own_bodies_set_where_it_lands(monkeypatch) -> None:
     spec = load_task(PANDA)
     graph = believed_graph(spec)
     ctx = plan_context(spec)
-    unchecked = _planned_without(monkeypatch, spec, "false_seat_problem")
+    # nor the let-go's: the palm opening beside the box, which stands off it by the grip
+    unchecked = _planned_without(monkeypatch, spec, "false_seat_problem", "fine_motion_obstruction")
     grasp = unchecked.pickup.grasp
     assert round(math.degrees(grasp.gamma)) == 100
     # the Panda's palm mesh, its vertices put in the pin end's frame: its lowest point, against
@@ -172,10 +173,17 @@ def test_a_urdf_hands_own_bodies_set_where_it_lands(monkeypatch) -> None:
     assert h <= depth <= 0.0203 + unchecked.success_threshold + dz
     # With the check every candidate is refused: the face's height is known exactly, but a tap
     # reads it with the hand's own error and would not narrow Δz
+    monkeypatch.setattr("synth.strategies.refine.fine_motion_obstruction", lambda *a, **k: None)
     with pytest.raises(SynthError) as refused:
         plan_task(spec)
+    monkeypatch.undo()
     assert "2.01 cm above the pin end" in str(refused.value).splitlines()[0]
     assert "with a tap: a tap would not narrow Δz" in str(refused.value)
+    # and the let-go's check refuses this grasp first: the palm opens 0.24 cm from the box's
+    # side, and the pin sits in the hand off by up to the pickup's ±0.1 in, ±0.5°
+    with pytest.raises(SynthError) as refused:
+        plan_task(spec)
+    assert "the let-go in BH1 sweeps palm into BOX (they come 0.24 cm apart" in str(refused.value)
 
 
 def test_a_miss_beside_a_thin_plate_on_the_table_is_refused(monkeypatch) -> None:

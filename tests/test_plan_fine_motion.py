@@ -209,10 +209,7 @@ def test_a_wrist_link_keeps_the_grips_error_from_the_part(monkeypatch) -> None:
     # grasp at its next quickest φ, whose seated wrist clears the box, since the planner tries
     # a pickup's other φ when the quickest one's fine motions are obstructed).
     spec = load_task(DATA_TASKS / "ur5_wrist_over_the_box.yaml")
-    fine_options = GrossMotionCheck.fine_options
-    monkeypatch.setattr(
-        GrossMotionCheck, "fine_options", lambda self, part, *_: fine_options(self, part)
-    )
+    monkeypatch.setattr(GrossMotionCheck, "_grip", lambda self, hand: None)
     unchecked = plan_task(spec).strategy
     monkeypatch.undo()
     assert unchecked.pickup.grasp.gamma == pytest.approx(100 * DEG)
@@ -250,7 +247,7 @@ def test_the_seated_hand_keeps_the_holes_error_from_a_wall(monkeypatch) -> None:
     monkeypatch.setattr(
         GrossMotionCheck,
         "seated_options",
-        lambda self, graph, part, hand, seat: self.fine_options(part, hand),
+        lambda self, graph, part, hand, *_: self.fine_options(part, hand.rotation),
     )
     unchecked = plan_task(spec).strategy
     monkeypatch.setattr(GrossMotionCheck, "seated_options", seated_options)

@@ -21,6 +21,7 @@ from synth.models.loader import load_task
 from synth.replay.run import replay_context, run_trial, trial_world
 from synth.replay.trace import record_run
 from synth.strategies import plan_task
+from synth.strategies.clearance import GrossMotionCheck
 from synth.strategies.context import plan_context
 
 TURNED = DATA_TASKS / "turned_under_the_hand.yaml"
@@ -63,6 +64,9 @@ def test_a_palm_over_the_edge_of_a_turned_box_is_refused_before_the_proof(monkey
     # a pin gone down beside the box could pass the test too: synth.strategies.beside; in this
     # world the pin is truly seated, the tip at BH1's bottom, and only the turn is at fault)
     monkeypatch.setattr("synth.strategies.refine.false_seat_problem", lambda *a, **k: None)
+    # (and without the grip's error on the let-go, which refuses the palm 1 mm over the edge
+    # on its own: test_letgo_grip.py)
+    monkeypatch.setattr(GrossMotionCheck, "_grip", lambda self, hand: None)
     unturned = plan_task(spec).strategy
     monkeypatch.undo()
     grasp = unturned.pickup.grasp
@@ -73,10 +77,16 @@ def test_a_palm_over_the_edge_of_a_turned_box_is_refused_before_the_proof(monkey
     opens = [s for s in hit.samples if s.motion == "open"]
     seated = trial_world(context, 0, 4)[0].pose("bh1").actInv(opens[-1].pins["PIN1"])
     assert seated.translation == pytest.approx([0.0, 0.0, -0.0171], abs=1e-6)
-    # With them that candidate is refused, naming the turn, and the chosen one lets go clear
+    # With them that candidate is refused, naming the turn (the grip left out as above), and
+    # with the grip too; the chosen one lets go clear
+    monkeypatch.setattr(GrossMotionCheck, "_grip", lambda self, hand: None)
+    turned = plan_task(spec)
+    monkeypatch.undo()
+    why = [r.reason for r in turned.rejected if r.candidate == unturned.name]
+    assert why and "(BOX turned rz -10.00° about the seat) sweeps palm into BOX" in why[0]
     plan = plan_task(spec)
     why = [r.reason for r in plan.rejected if r.candidate == unturned.name]
-    assert why and "(BOX turned rz -10.00° about the seat) sweeps palm into BOX" in why[0]
+    assert why and "the let-go in BH1" in why[0] and "sweeps palm into BOX" in why[0]
     assert plan.strategy.name != unturned.name
     clear = run_trial(replay_context(emit_program(plan.strategy, graph), spec), 0, 4)
     assert clear.outcome == "success"

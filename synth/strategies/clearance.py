@@ -53,7 +53,8 @@ it), so the part and the hand keep the clearance only, the other solids their ow
 the pin may touch the part (its tip enters the hole or lands on the surface). Once the pin is
 seated the hand follows the hole's place but not the part's turn: the let-go and the get-clear
 are swept again with the part turned about the seat to each extreme of its rotation error
-(:meth:`GrossMotionCheck.seat_turns`).
+(:meth:`GrossMotionCheck.seat_turns`), and the hand stands off the pin by the grip
+(:meth:`GrossMotionCheck.seated_options`).
 """
 
 from __future__ import annotations
@@ -330,35 +331,69 @@ class GrossMotionCheck:
         self,
         graph: AttributeGraph,
         part: str | None,
-        seated_hand: NDArray[np.float64],
+        seated_hand: pin.SE3,
         seat: LinkDisplacement,
+        scene: CollisionScene,
+        q_seated: NDArray[np.float64],
     ) -> SweepOptions:
         """:meth:`fine_options` once the hole holds the pin: the hand where the hole truly is.
 
         The hand stops where the search found the true hole, displaced from its believed seat
         by up to ``seat`` (the hole's world error,
-        :func:`synth.strategies.fine.seated_hand_displacement`) and by the grip (the pickup's
-        hand error less what CENTER takes out along the fingers, in the hand's frame, without
-        its turn: the wrist links carry that). A solid that does not move with the part
-        stands off the hand by both as well as by its own error: a block 2.25 cm beyond the
-        box's edge, 8 cm tall, was hit by the fingers opening at a seat up to 0.76 cm nearer
-        it than believed in 0.5–2 % of the replay's worlds, and the proof passed 198 of 200.
-        A solid that shares an uncertain link with the part (what stands on it, a fixture
-        that holds it) moves with the hole as well and keeps its own margin only.
+        :func:`synth.strategies.fine.seated_hand_displacement`) and by the grip: the pin sits
+        in the hand off where the program believes by the pickup's hand error E less what
+        CENTER takes out along the fingers (hand frame), so the hand is at hole ∘ E, off by
+        E's shift and by E's turn about the hand's origin. Split along the pair:
+
+        * every solid stands off the hand by E's shift (y, z in the hand's frame), the part
+          itself too: the let-go's palm 0.4 cm below a plate's face beside its corner, the
+          plate turned 1.8° about the seat, hit it in 2 % of the worlds at the turn's edge
+          (a 3 mm pin held at γ = 100°) when the part kept the clearance only;
+        * the palm and fingers of ``scene`` (the let-go's, at ``q_seated``) turn with E about
+          the hand's origin, at their hull vertices' levers (a Panda's palm is 0.8 cm from
+          its ball about the hand's origin but only the levers of its corners matter);
+          the wrist links at their balls' (:meth:`fine_options`);
+        * a solid that does not move with the part also stands off by ``seat``: a block
+          2.25 cm beyond the box's edge, 8 cm tall, was hit by the fingers opening at a seat
+          up to 0.76 cm nearer it than believed in 0.5–2 % of the replay's worlds. A solid
+          that shares an uncertain link with the part (what stands on it, a fixture that
+          holds it) moves with the hole and keeps its own margin only.
+
+        Each term is on one side of a pair, so no pair counts E twice.
         """
-        options = self.fine_options(part, seated_hand)
+        options = self.fine_options(part, seated_hand.rotation)
         part_frame = None if part is None else self.solid_frames.get(part)
         shared = set() if part_frame is None else _uncertain_links(graph, part_frame)
         displacements = dict(options.displacements)
-        grip = self._grip(seated_hand)
-        hand = (seat,) if grip is None else (seat, replace(grip, angles=np.zeros(3)))
+        grip = self._grip(seated_hand.rotation)
+        shift = () if grip is None else (replace(grip, angles=np.zeros(3)),)
         for obstacle in self.solids:
             name = obstacle.name
             frame = self.solid_frames.get(name)
-            if name == part or (frame is not None and shared & _uncertain_links(graph, frame)):
-                continue
+            moves_with_part = name == part or (
+                frame is not None and bool(shared & _uncertain_links(graph, frame))
+            )
             own = displacements.get(name)
-            displacements[name] = Displacement((*(() if own is None else own.links), *hand))
+            extra = shift if moves_with_part else (seat, *shift)
+            links = (*(() if own is None else own.links), *extra)
+            if links:
+                displacements[name] = Displacement(links)
+        if grip is not None:
+            turn = replace(grip, translation=np.zeros(3))
+            for name, radius in self.wrist_radii.items():
+                displacements[name] = Displacement((replace(turn, radius=radius),))
+            for body in scene.bodies:
+                if body.role == "hand":
+                    placed = seated_hand.actInv(scene.body_pose(q_seated, body.name))
+                    displacements[body.name] = Displacement(
+                        (
+                            replace(
+                                turn,
+                                radius=bounding_radius(body.geometry, placed),
+                                points=hull_points(body.geometry, placed),
+                            ),
+                        )
+                    )
         return replace(options, displacements=displacements)
 
     def support_of(self, graph: AttributeGraph, part: str) -> str:

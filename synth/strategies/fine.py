@@ -18,7 +18,9 @@ configurations the program moves through (each solved nearest the one before it)
 
 4 and 5 are swept again with the part (and the pin in it) turned about the seat to each
 extreme of the part's rotation error: the hand follows the hole's place, not the part's turn
-(:meth:`~synth.strategies.clearance.GrossMotionCheck.seat_turns`).
+(:meth:`~synth.strategies.clearance.GrossMotionCheck.seat_turns`). In 4 and 5 the hand stands
+off the seated pin by the grip, so the part keeps its shift and the palm and fingers its turn
+(:meth:`~synth.strategies.clearance.GrossMotionCheck.seated_options`).
 
 The hand follows the target part in these moves (the pin touches it or sits in it), so the
 part and the arm keep the clearance only, the other solids their own directional margins
@@ -134,9 +136,16 @@ def fine_motion_obstruction(
         if reason is not None:
             return reason
     seated = pin_world(ctx, strategy.destination)
-    options = gross.seated_options(ctx.graph, part, hand_seated, seated_hand_displacement(ctx))
     turns = [None, *gross.seat_turns(ctx.graph, ctx.hole_frame, ctx.world_hole.translation)]
     scenes = [(t, gross.letting_go(strategy.let_go_opening, seated, part, t)) for t in turns]
+    options = gross.seated_options(
+        ctx.graph,
+        part,
+        ctx.arm.forward(cand.q_destination),
+        seated_hand_displacement(ctx),
+        scenes[0][1],
+        cand.q_destination,
+    )
     for turn, scene in scenes:
         motion = f"let-go in {hole}" + ("" if turn is None else f" ({turn.words})")
         reason = _sweep(ctx, scene, [cand.q_destination], motion, options)
