@@ -95,16 +95,24 @@ def _query_names(route: APIRoute) -> set[str]:
 
 
 async def refuse_unknown_query(request: Request) -> None:
-    """A query parameter the route does not take is a ``422`` naming it (and its near miss).
+    """A query parameter the route does not take, or one given twice, is a ``422`` naming it.
 
     Ignored, ``POST /v1/plans?trails=500`` planned with the server's default trials and said
-    nothing of the typo.
+    nothing of the typo (the near miss is named). ``?trials=3&trials=5`` took the last one as
+    silently: no route takes a list, so a repeated parameter is a client's mistake.
     """
     route = request.scope.get("route")
     if not isinstance(route, APIRoute):
         return
     known = _query_names(route)
     for name in request.query_params:
+        given = request.query_params.getlist(name)
+        if len(given) > 1:
+            raise InvalidRequest(
+                f"query parameter {name!r} is given {len(given)} times "
+                f"({', '.join(repr(v) for v in given)}); give it once",
+                parameter=name,
+            )
         if name in known:
             continue
         near = difflib.get_close_matches(name, sorted(known), n=1)

@@ -180,6 +180,19 @@ def test_unknown_query_parameter_is_named(
     assert client.get("/v1/plans?limit=5").status_code == 200  # the route's own still work
 
 
+def test_a_repeated_query_parameter_is_refused(client: TestClient) -> None:
+    # ?trials=3&trials=5 planned with 5 trials and said nothing (the fourth hunt, item c);
+    # nothing is stored: the listing is as it was
+    before = client.get("/v1/plans").json()
+    answer = problem(
+        client.post("/v1/plans?trials=3&trials=5", content=SEED_TEXT, headers=YAML), 422
+    )
+    assert answer["parameter"] == "trials"
+    assert "'trials' is given 2 times ('3', '5'); give it once" in str(answer["detail"])
+    assert client.get("/v1/plans").json() == before
+    problem(client.get("/v1/plans?limit=5&limit=5"), 422)
+
+
 @pytest.mark.parametrize(
     ("field", "value"), [("trials", True), ("trials", "3"), ("seed", 1.0), ("seed", False)]
 )
