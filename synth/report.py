@@ -513,7 +513,8 @@ def trial_text(record: TrialRecord, *, every_hand_error: bool = True) -> str:
     The hand's errors, one per motion target, are all listed, or with ``every_hand_error``
     False (a list of failures) only those of the run's last motion, with a count of the rest.
     A draw prints as ``hand (line 57, target 2)``: the second target (the destination after a
-    VIA) of the motion at line 57.
+    VIA) of the motion at line 57; ``hand (line 57, visit 3, target 1)`` where the run came to
+    that motion more than once (a search loop), at its third.
     """
     run = record.run
     where = f" at line {run.line}" if run.line is not None else ""
@@ -523,6 +524,7 @@ def trial_text(record: TrialRecord, *, every_hand_error: bool = True) -> str:
     for frame, values in record.errors.items():
         lines.append(f"  {frame}: {_error_parts(values.items())}")
     draws = run.hand_errors
+    repeated = {d.line for d in draws if d.visit > 1}
     if not every_hand_error and draws:
         first = max(k for k, d in enumerate(draws) if d.target == 1)
         earlier, draws = first, draws[first:]
@@ -532,6 +534,8 @@ def trial_text(record: TrialRecord, *, every_hand_error: bool = True) -> str:
             )
     for draw in draws:
         where = "" if draw.line is None else f"line {draw.line}, "
+        if draw.line in repeated:
+            where += f"visit {draw.visit}, "
         lines.append(f"  hand ({where}target {draw.target}): {_error_parts(draw.values)}")
     return "\n".join(lines)
 

@@ -228,7 +228,9 @@ def test_failures_and_min_success(capsys: pytest.CaptureFixture[str]) -> None:
     # the hand's errors at the last motion (a search point of line 57: its VIA, its point);
     # the 19 before are left to --trial 18
     assert "hand: 19 earlier target(s) not shown (--trial 18 lists them)" in out
-    assert "hand (line 57, target 1): x " in out and "hand (line 57, target 2): x " in out
+    # (the loop's eighth pass: 19 = 5 targets of lines 28, 34 and 38 and 7 passes of two)
+    assert "hand (line 57, visit 8, target 1): x " in out
+    assert "hand (line 57, visit 8, target 2): x " in out
     code, _ = _cli(_replay_args(30, "--min-success", "0.96"), capsys)
     assert code == 0
     # With --json the exit code's reason is in the document too (`ok` is the nominal run's).
@@ -264,11 +266,18 @@ def test_one_trial_alone_is_the_trial_of_the_full_run(capsys: pytest.CaptureFixt
         assert [draw[name] for name in block.names] == row.tolist()
     # Lines 28 (the grasp, with a VIA), 34 (the lift), 38 (the first attempt, with a VIA),
     # then line 57's search moves, two targets each, the last of which aborts at line 60;
-    # targets count from 1 in the JSON as in the text ("hand (line 57, target 2)").
-    motions = [(d["line"], d["target"]) for d in hand]
-    assert motions[:5] == [(28, 1), (28, 2), (34, 1), (38, 1), (38, 2)]
+    # targets count from 1 in the JSON as in the text ("hand (line 57, target 2)"), and so do
+    # the loop's passes through line 57 ("hand (line 57, visit 3, target 1)").
+    motions = [(d["line"], d["visit"], d["target"]) for d in hand]
+    assert motions[:5] == [(28, 1, 1), (28, 1, 2), (34, 1, 1), (38, 1, 1), (38, 1, 2)]
     searches = motions[5:]
-    assert searches == [(57, 1), (57, 2)] * (len(searches) // 2) and searches
+    passes = len(searches) // 2
+    assert searches == [(57, k, t) for k in range(1, passes + 1) for t in (1, 2)] and searches
+    code, out = _cli(
+        ["replay", str(SEED_SEARCH), "--task", str(SEED_TASK), "--trial", "18"], capsys
+    )
+    assert "hand (line 28, target 2): x " in out  # a motion run once keeps the short label
+    assert f"hand (line 57, visit {passes}, target 2): x " in out
 
 
 def test_diagnostic_options_are_checked(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:

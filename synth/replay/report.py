@@ -66,17 +66,25 @@ class HandDraw:
     """One hand positioning error a run drew: for target ``target`` of the motion at ``line``.
 
     ``target`` counts the motion's targets from 1 (its via points, then its destination);
-    ``values``: the error's parameters by name (``x``, ``y``, ``z`` [m], ``rx``, ``ry``, ``rz``
-    [rad], the task's ``manipulator.hand_error`` block), in the order the block lists them.
+    ``visit`` counts the times the run came to the motion at ``line``, from 1 (a search loop's
+    MOVE runs once a point); ``values``: the error's parameters by name (``x``, ``y``, ``z``
+    [m], ``rx``, ``ry``, ``rz`` [rad], the task's ``manipulator.hand_error`` block), in the
+    order the block lists them.
     """
 
     line: int | None
     target: int
     values: tuple[tuple[str, float], ...]
+    visit: int = 1
 
     def to_json(self) -> dict[str, Any]:
-        """``{"line", "target", "x", "y", …}`` (SI units)."""
-        return {"line": self.line, "target": self.target, **dict(self.values)}
+        """``{"line", "visit", "target", "x", "y", …}`` (SI units)."""
+        return {
+            "line": self.line,
+            "visit": self.visit,
+            "target": self.target,
+            **dict(self.values),
+        }
 
 
 @dataclass(frozen=True)

@@ -203,6 +203,7 @@ class HandErrors:
         """Number of errors drawn so far."""
         self.draws: list[HandDraw] = []
         """The errors drawn so far, each with its motion's AL line (none for the exact stream)."""
+        self._visits: dict[int | None, int] = {}
 
     @classmethod
     def none(cls) -> HandErrors:
@@ -228,9 +229,8 @@ class HandErrors:
             assert self._rng is not None
             self._batch = self._space.sample(self._rng, _HAND_BATCH)
         v, self._batch = self._batch[0], self._batch[1:]
-        self.draws.append(
-            HandDraw(
-                line, target, tuple((n, float(x)) for n, x in zip(self._names, v, strict=True))
-            )
-        )
+        if target == 1:
+            self._visits[line] = self._visits.get(line, 0) + 1
+        values = tuple((n, float(x)) for n, x in zip(self._names, v, strict=True))
+        self.draws.append(HandDraw(line, target, values, self._visits.get(line, 1)))
         return link_error(self._names, v)
