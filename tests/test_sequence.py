@@ -409,19 +409,29 @@ def test_a_step_gives_up_its_best_plan_when_it_leaves_no_next_step(monkeypatch) 
         DATA_TASKS,
     )
     assert isinstance(refused, Rejection) and refused.kind == "collision"
+    # the pickup starts where PIN2's step left the arm, not at the park (it said "from BPARK")
+    assert "the move from where the last step left the arm to the grasp's" in refused.reason
+    assert "BPARK" not in refused.reason
 
 
-def test_a_step_keeps_its_best_plan_when_the_next_pickup_is_lifted() -> None:
-    # The same rearrangement, with gross motions lifted over the workcell: PIN2's best plan
-    # (γ = 100°) is kept, and PIN1's pickup from where it ends rises over PIN2 in BH2.
+def test_a_refusal_lists_a_rejection_made_twice_once(monkeypatch) -> None:
+    # A sequence's step refused alike from two places in the search was listed twice, word for
+    # word, and counted twice in "(2 of 3 candidates)" (the fourth hunt, four pins on the
+    # Panda). Here every step is refused with one text, from the root's two orders.
+    import synth.strategies.sequence as sequence_module
+    from synth.exceptions import NoStrategyError
+
     spec = load_task(REARRANGE)
-    check = _step_check(DATA_TASKS, {})
-    plan = plan_sequence(spec, check, base_dir=DATA_TASKS, compare=False)
-    first, second = plan.steps
-    assert first.strategy.pickup.grasp.gamma == pytest.approx(math.radians(100))
-    lifts = second.strategy.pickup.approach_detour
-    assert lifts and all(d.base == "NILTRANS" for d in lifts)
-    assert any("lifted over PIN2" in d for d in second.strategy.decisions)
+    assert spec.insertions is not None and spec.insertions.order == "free"
+    alike = Rejection("a step", "the proof failed", cause="proof")
+    made = iter([alike, Rejection("a step", "the proof failed", cause="proof")])
+    monkeypatch.setattr(sequence_module, "_grown", lambda *a, **k: next(made))
+    with pytest.raises(NoStrategyError) as refused:
+        plan_sequence(spec, _step_check(DATA_TASKS, {}), base_dir=DATA_TASKS, compare=False)
+    assert next(made, None) is None  # both were made
+    assert len(refused.value.rejections) == 1 and refused.value.rejections[0] is alike
+    assert str(refused.value).count("[?, proof]: the proof failed") == 1
+    assert "(1 of 1 candidates)" in str(refused.value)
 
 
 @pytest.mark.slow

@@ -90,7 +90,8 @@ class PlanContext:
     ``hand_al`` AL names. ``d_i`` [m] is how deep the pin sits in its start hole (tip first,
     seed L2036); ``target_end`` says which end goes into the target hole and
     ``pin_from_end`` is that end's frame in the pin frame (z out of the hole once
-    inserted). ``q_park`` is the arm at the park frame.
+    inserted). ``q_park`` is where the arm starts: at the park frame, or where the last step
+    of a sequence left it (``from_park`` False).
     """
 
     spec: TaskSpec
@@ -114,6 +115,12 @@ class PlanContext:
     base_world: World
     gross: GrossMotionCheck
     counters: PlanCounters = field(default_factory=PlanCounters)
+    from_park: bool = True
+
+    @property
+    def start_words(self) -> str:
+        """Where the arm starts, for messages: ``BPARK``, or where the last step left it."""
+        return self.park_al if self.from_park else "where the last step left the arm"
 
     @property
     def pin_al(self) -> str:
@@ -309,4 +316,5 @@ def plan_context(
         base_world=World.root(facts, label="task"),
         gross=GrossMotionCheck.of(arm, graph, insertion.pin, manip.hand_error, q_park),
         counters=counters,
+        from_park=start is None,
     )

@@ -584,7 +584,7 @@ def _pickup(
     if q_departure is None:
         return Rejection(grasp_label(grasp), "no arm solution at the departure point")
     empty_hand = ctx.gross.empty_hand(approach_opening)
-    motion = f"move from {ctx.park_al} to the grasp's approach point"
+    motion = f"move from {ctx.start_words} to the grasp's approach point"
     blocked = ctx.obstructed(empty_hand, [ctx.q_park, q_approach], motion)
     detour: Detour | None = None
     if blocked is not None:

@@ -141,7 +141,7 @@ def refine(ctx: PlanContext, cand: Candidate) -> Refined | Rejection:
     decisions.append(f"tilt Δθ = {_deg(fp.dtheta)} ≤ Δθ_ok = {_deg(ins.dtheta_ok)}")
     decisions.extend(ins.notes)  # a given Δθ_ok clipped to the wedging limit
     for detour, motion in (
-        (cand.pickup.detour, f"the move from {ctx.park_al} to the grasp"),
+        (cand.pickup.detour, f"the move from {ctx.start_words} to the grasp"),
         (cand.transport_detour, f"the transport to {ctx.hole_al}"),
     ):
         if detour is not None:

@@ -209,8 +209,12 @@ def plan_sequence(
             rejected.append(sibling)
         else:
             heapq.heappush(frontier, sibling)
-    root = root_cause(rejected)
-    raise NoStrategyError(spec.name, tuple(rejected), root)
+    # a step refused alike from two nodes (its sibling, another order) is said once
+    distinct: dict[tuple[str, str, str], Rejection] = {}
+    for r in rejected:
+        distinct.setdefault((r.candidate, r.reason, r.kind), r)
+    kept = list(distinct.values())
+    raise NoStrategyError(spec.name, tuple(kept), root_cause(kept))
 
 
 @dataclass
