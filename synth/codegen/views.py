@@ -193,6 +193,9 @@ class SearchView:
     retreat: MoveView | None
     below: Fragment | None
     beside: Fragment | None
+    first_retreat: MoveView | None = None
+    """Where a first attempt that felt nothing backs out to before the loop (the record's
+    ``first_off_surface = "retract"``): its approach point above the believed hole."""
 
 
 @dataclass(frozen=True)
@@ -411,6 +414,7 @@ def program_view(strategy: PinInHoleStrategy, graph: AttributeGraph) -> ProgramV
             pin=pin_,
         )
 
+    first_retracts = s.search is not None and s.search.first_off_surface == "retract"
     attempt = AttemptView(
         moves=motion_sequence(
             [
@@ -418,7 +422,7 @@ def program_view(strategy: PinInHoleStrategy, graph: AttributeGraph) -> ProgramV
                 *(_waypoint(names, v, "approach_vias") for v in s.approach_vias),
                 _waypoint(names, s.target, "target"),
             ],
-            guard=guard,
+            guard=replace(guard, message=None) if first_retracts else guard,
             field="target",
         ),
         distance_off=distance_off,
@@ -494,6 +498,18 @@ def _search(
         (retract,) = motion_sequence([shifted(s.approach, "approach")], field="approach")
     elif search.off_surface != "abort":
         raise CodegenError("search.off_surface", f"abort or retract, not {search.off_surface!r}")
+    first_retreat = None
+    if search.first_off_surface == "retract":
+        if retract is None:
+            raise CodegenError(
+                "search.first_off_surface", "the first attempt retracts only when the search does"
+            )
+        waypoint = _waypoint(names, s.approach, "approach")
+        (first_retreat,) = motion_sequence([waypoint], field="approach")
+    elif search.first_off_surface != "abort":
+        raise CodegenError(
+            "search.first_off_surface", f"abort or retract, not {search.first_off_surface!r}"
+        )
     threshold_m = _positive(s.success_threshold, "success_threshold")
 
     return SearchView(
@@ -533,4 +549,5 @@ def _search(
         retreat=retract,
         below=None if retract is None else L.length(-threshold_m, field="success_threshold"),
         beside=None if retract is None else L.comment(f"NOTHING FELT: {pin_.text} WENT BESIDE"),
+        first_retreat=first_retreat,
     )

@@ -72,7 +72,14 @@ from synth.strategies.relations import (
     hole_frame_offset,
 )
 
-__all__ = ["Top", "false_seat_problem", "solid_tops", "support_landing_problem", "support_landings"]
+__all__ = [
+    "Top",
+    "false_seat_problem",
+    "first_attempt_may_go_beside",
+    "solid_tops",
+    "support_landing_problem",
+    "support_landings",
+]
 
 
 _UPRIGHT = 1e-6
@@ -318,6 +325,21 @@ def _can_go_beside(ctx: PlanContext, where: Landing) -> bool:
     if not isinstance(shape, SurfaceShape):
         return False
     return not shapely.Polygon(shape.outline).covers(where.region)
+
+
+def first_attempt_may_go_beside(ctx: PlanContext, where: Landing) -> bool:
+    """Whether the first attempt may bring the pin down off the hole's face.
+
+    Its places are the whole footprint about the believed hole (the first of
+    :func:`~synth.strategies.landing.reached_places`); with the seed's arrival abort such a
+    world aborts though the search would find the hole (a box known to ±1 in, ±5°, BH1 0.6 cm
+    from two edges: 8 of 100 trials "EXPECTED A FORCE HERE", every candidate refused).
+    """
+    shape = ctx.graph.node(ctx.hole_shape.surface).shape
+    first = where.attempts[0][1] if where.attempts else None
+    if not isinstance(shape, SurfaceShape) or first is None:
+        return False
+    return not shapely.Polygon(shape.outline).covers(first)
 
 
 def false_seat_problem(ctx: PlanContext, where: Landing) -> str | None:

@@ -253,6 +253,11 @@ class Search:
     time: float
     off_surface: OffSurface = "retract"
     """What a search move that feels nothing does (see :data:`OffSurface`)."""
+    first_off_surface: OffSurface = "abort"
+    """What the first attempt does when it feels nothing: the seed's arrival abort (L2736),
+    or, where the planner found that it may come down off the face
+    (:func:`synth.strategies.beside.first_attempt_may_go_beside`) and the search retracts,
+    back out to the approach point and search."""
 
     def to_json(self) -> dict[str, Any]:
         """JSON form (SI)."""
@@ -264,6 +269,7 @@ class Search:
             "rings": self.rings,
             "expected_points": self.expected_points,
             "off_surface": self.off_surface,
+            "first_off_surface": self.first_off_surface,
             "time": self.time,
         }
 

@@ -34,7 +34,11 @@ from synth.al.interpreter import MAX_TIME
 from synth.errors.estimate import RelationModel
 from synth.models.world import World
 from synth.strategies.approach import Candidate
-from synth.strategies.beside import false_seat_problem, support_landing_problem
+from synth.strategies.beside import (
+    false_seat_problem,
+    first_attempt_may_go_beside,
+    support_landing_problem,
+)
 from synth.strategies.context import PlanContext
 from synth.strategies.fine import fine_motion_obstruction
 from synth.strategies.footprint import estimate_footprint, footprint_tables
@@ -295,6 +299,20 @@ def _fine_motions(
         wrong_hole = wrong_hole_problem(ctx, where)
         if wrong_hole is not None:
             return Rejection(cand.name, wrong_hole, cause="footprint"), tap is None
+        if (
+            search is not None
+            and search.off_surface == "retract"
+            and first_attempt_may_go_beside(ctx, where)
+        ):
+            strategy = dataclasses.replace(
+                strategy,
+                search=dataclasses.replace(search, first_off_surface="retract"),
+                decisions=(
+                    *strategy.decisions,
+                    f"the first attempt may come down beside {ctx.hole_al}'s face (the "
+                    "footprint reaches past its edge): felt nothing, it backs out and searches",
+                ),
+            )
     return Refined(strategy, world, cand), False
 
 
