@@ -43,6 +43,7 @@ from synth.models.manipulator import ArmSpec, HandSpec, ManipulatorSpec
 from synth.models.park import nominal_environment, park_configuration
 from synth.replay.run import replay_context
 from synth.strategies.context import plan_context
+from synth.units import CM, INCH
 
 ROBOTS = example_robot_data_dir()
 
@@ -279,6 +280,29 @@ def test_park_configuration_is_collision_free_or_named():
     inside = manipulator_arm(_manipulator("ur5", (45.2, 102), 10.7))
     with pytest.raises(SpecError, match=r"manipulator.arm.base.*inside BOX"):
         park_configuration(inside, pose_to_se3(manip.park.pose), nominal_environment(graph, inside))
+
+
+def test_a_park_where_the_opening_fingers_touch_the_arm_is_refused_at_the_park() -> None:
+    # The UR5's base 12.9 cm from the park (the fifth hunt's ur5_far60): clear with the fingers
+    # closed, but the program's first OPEN (pin diameter + 1 in, L2139) swings finger_right
+    # into the upper arm, and the planner said "every motion the task needs is obstructed"
+    graph = believed_graph(load_task(SEED_TASK))
+    manip = _manipulator("ur5", (49.05, 45.2), 10.7)
+    arm = manipulator_arm(manip)
+    environment = nominal_environment(graph, arm)
+    park = pose_to_se3(manip.park.pose)
+    q = park_configuration(arm, park, environment)  # the replay's start: fingers closed
+    opening = 0.635 * CM + 1 * INCH
+    touching = CollisionScene(arm, environment, opening=opening).collisions(q)
+    assert ("upper_arm_link_0", "finger_right") in touching or (
+        "finger_right",
+        "upper_arm_link_0",
+    ) in touching
+    with pytest.raises(SpecError, match=r"^manipulator.park: .*opened to 3.17 cm .*finger_right"):
+        park_configuration(arm, park, environment, opening=opening)
+    # nearer the column's other side the same opening is clear: the seed's UR5 base
+    clear = manipulator_arm(_manipulator("ur5", (25, 80), 10.7))
+    park_configuration(clear, park, nominal_environment(graph, clear), opening=opening)
 
 
 # ---- end to end --------------------------------------------------------------------------------

@@ -34,10 +34,10 @@ from synth.strategies import plan_task
 from synth.strategies.context import plan_context
 from synth.strategies.grasp import (
     generate_pickups,
-    hand_openings,
     pin_from_approach,
     reached_grasp,
 )
+from synth.strategies.options import hand_openings
 from synth.strategies.records import Grasp, Rejection
 from synth.units import DEG
 

@@ -27,11 +27,11 @@ from synth.strategies.grasp import (
     geometry_problem,
     grasp_distance_limits,
     grasp_distances,
-    hand_openings,
     palm_clearance,
     pin_from_approach,
 )
 from synth.strategies.hypotheses import Affixed, Holding
+from synth.strategies.options import hand_openings
 from synth.strategies.records import Grasp
 from synth.strategies.relations import approach_relation
 from synth.units import CM, DEG, INCH

@@ -62,9 +62,20 @@ def base_overlaps(arm: Arm, environment: list[Obstacle]) -> list[tuple[str, str]
 
 
 def park_configuration(
-    arm: Arm, park: pin.SE3, environment: list[Obstacle], al_name: str = "BPARK"
+    arm: Arm,
+    park: pin.SE3,
+    environment: list[Obstacle],
+    al_name: str = "BPARK",
+    opening: float | None = None,
 ) -> NDArray[np.float64]:
-    """The arm's start at ``park`` (module docstring); :class:`SpecError` naming the park."""
+    """The arm's start at ``park`` (module docstring); :class:`SpecError` naming the park.
+
+    ``opening`` [m]: the fingers' opening of the program's first ``OPEN``, made at the park;
+    the chosen configuration must be clear with the fingers opened so, or the park is refused
+    (a UR5's park 12.9 cm from its column: the opening finger met the upper arm, and every
+    motion was said to be obstructed). It does not choose the configuration: the replay,
+    which does not know the opening, starts from the same one.
+    """
     overlaps = base_overlaps(arm, environment)
     if overlaps:
         pairs = ", ".join(f"{a} inside {b}" for a, b in overlaps)
@@ -85,4 +96,16 @@ def park_configuration(
             f"every one of the arm's {len(solutions)} configurations at {where} touches "
             f"something ({touching}); move the park frame or the arm's base",
         )
-    return rank_solutions(arm, clear)[0].q
+    q = rank_solutions(arm, clear)[0].q
+    if opening is not None:
+        opened = CollisionScene(arm, environment, opening=min(opening, arm.hand.max_opening))
+        opened_contacts = opened.collisions(q)
+        if opened_contacts:
+            pairs = ", ".join(f"{a}/{b}" for a, b in opened_contacts[:3])
+            raise SpecError(
+                FIELD,
+                f"at {where} the fingers, opened to {100 * opening:.3g} cm as the program's "
+                f"first OPEN does, touch something ({pairs}); move the park frame or the "
+                "arm's base",
+            )
+    return q

@@ -42,7 +42,7 @@ from synth.models.uncertainty import Uncertainty
 from synth.models.world import Fact, World
 from synth.strategies.clearance import GrossMotionCheck
 from synth.strategies.hypotheses import At, HandError, Holding, InHole, Task, Uncertain
-from synth.strategies.options import PlanOptions
+from synth.strategies.options import PlanOptions, hand_openings
 from synth.strategies.records import Grasp
 
 Configuration = NDArray[np.float64]
@@ -276,11 +276,21 @@ def plan_context(
     park = pose_to_se3(manip.park.pose)
     counters = PlanCounters()
     counters.ik += 1
-    q_park = (
-        park_configuration(arm, park, nominal_environment(graph, arm), manip.park.al_name)
-        if start is None
-        else np.array(start, dtype=float)
-    )
+    if start is None:
+        try:
+            q_park = park_configuration(
+                arm,
+                park,
+                nominal_environment(graph, arm),
+                manip.park.al_name,
+                opening=hand_openings(pin_shape.diameter, opts)[0],
+            )
+        except SpecError as exc:  # the park's line in the task file
+            if exc.line is not None:
+                raise
+            raise SpecError(exc.path, exc.detail, spec.line_of(exc.path)) from None
+    else:
+        q_park = np.array(start, dtype=float)
     d_i = start_depth(graph, insertion.start_hole, insertion.pin)
     end: PinEnd = "tip" if insertion.direction == "parallel" else "head"
     pin_al = graph.al_names[insertion.pin]

@@ -47,7 +47,7 @@ from synth.models.world import World
 from synth.strategies.context import Configuration, PinEnd, PlanContext, hand_at
 from synth.strategies.detour import Detour, lift_over
 from synth.strategies.hypotheses import Affixed, At, GraspDetermination, Holding
-from synth.strategies.options import PlanOptions
+from synth.strategies.options import PlanOptions, hand_openings
 from synth.strategies.records import Destination, Grasp, GraspStrategy, Rejection, grasp_remarks
 
 """World atom for a grasp determination of NILTRANS: ``center`` holds the pin exactly (L2630)."""
@@ -100,20 +100,6 @@ def grasp_distances(d_min: float, d_max: float, options: PlanOptions) -> tuple[f
 def grasp_angles(same_end: bool, options: PlanOptions) -> tuple[float, ...]:
     """The γ values tried [rad]: 180°, 135°, 100° (L2064–2068), or 90° turned over (L2078)."""
     return options.same_end_gammas if same_end else (options.turn_over_gamma,)
-
-
-def hand_openings(diameter: float, options: PlanOptions) -> tuple[float, float]:
-    """``(approach, grasp)`` openings [m] (L2139).
-
-    Approach: 1 in + the pin diameter at the grasp point. Grasp (the ``center`` closure
-    threshold): the diameter − 0.1 in, but at least a quarter of the diameter. Fingers closing
-    on the pin stop at its diameter and on nothing close past it, so any threshold between 0
-    and the diameter tells the two apart; the seed's margin alone went to 0 at a 0.1 in pin
-    and below it negative (a 2 mm dowel was refused with "grasp_opening: expected a positive
-    number"). The seed's own pin (0.44 cm at the grasp point) keeps its 0.185 cm.
-    """
-    grasp = max(diameter - options.closure_margin, 0.25 * diameter)
-    return diameter + options.approach_opening_extra, grasp
 
 
 def _inverse_terms(terms: list[Term]) -> list[Term]:

@@ -90,3 +90,17 @@ class PlanOptions:
     at_lead: bool = False
     """Plan with Δr_ok and Δθ_ok at the parts' geometric lead when the task's Δr_ok is wider
     (:func:`synth.models.insertion.at_lead`): set for a sequence once a proof trial missed."""
+
+
+def hand_openings(diameter: float, options: PlanOptions) -> tuple[float, float]:
+    """``(approach, grasp)`` openings [m] (L2139).
+
+    Approach: 1 in + the pin diameter at the grasp point. Grasp (the ``center`` closure
+    threshold): the diameter − 0.1 in, but at least a quarter of the diameter. Fingers closing
+    on the pin stop at its diameter and on nothing close past it, so any threshold between 0
+    and the diameter tells the two apart; the seed's margin alone went to 0 at a 0.1 in pin
+    and below it negative (a 2 mm dowel was refused with "grasp_opening: expected a positive
+    number"). The seed's own pin (0.44 cm at the grasp point) keeps its 0.185 cm.
+    """
+    grasp = max(diameter - options.closure_margin, 0.25 * diameter)
+    return diameter + options.approach_opening_extra, grasp
