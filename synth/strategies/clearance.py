@@ -350,9 +350,9 @@ class GrossMotionCheck:
           plate turned 1.8° about the seat, hit it in 2 % of the worlds at the turn's edge
           (a 3 mm pin held at γ = 100°) when the part kept the clearance only;
         * the palm and fingers of ``scene`` (the let-go's, at ``q_seated``) turn with E about
-          the hand's origin, at their hull vertices' levers (a Panda's palm is 0.8 cm from
-          its ball about the hand's origin but only the levers of its corners matter);
-          the wrist links at their balls' (:meth:`fine_options`);
+          the hand's origin, at their hull vertices' levers (charged at the ball about the
+          hand's origin, with the shift on the palm too, a Panda's palm was asked 0.96 cm
+          and its tasks refused); the wrist links at their balls' (:meth:`fine_options`);
         * a solid that does not move with the part also stands off by ``seat``: a block
           2.25 cm beyond the box's edge, 8 cm tall, was hit by the fingers opening at a seat
           up to 0.76 cm nearer it than believed in 0.5–2 % of the replay's worlds. A solid
