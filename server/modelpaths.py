@@ -72,12 +72,8 @@ def confine_model_files(spec: TaskSpec, model_dirs: Sequence[Path]) -> TaskSpec:
     A refusal carries the field's line in the posted YAML, as every other spec refusal does
     (it had ``"line": null``, the fourth hunt).
     """
-    try:
+    with spec.lines_on_errors():
         return _confined(spec, model_dirs)
-    except SpecError as error:
-        if error.line is not None:
-            raise
-        raise SpecError(error.path, error.detail, spec.line_of(error.path)) from None
 
 
 def _confined(spec: TaskSpec, model_dirs: Sequence[Path]) -> TaskSpec:

@@ -206,6 +206,23 @@ def test_bad_spec_names_field_and_line(label: str, text: str, path: str, line: i
         assert info.value.detail.startswith("one axis per rotation, not 'z', 'x'")
 
 
+def test_a_refusal_made_after_loading_gets_its_fields_line() -> None:
+    # The park's refusal and the service's model paths are found after loading, by code that
+    # knows the field but not the file: its line is the field's in the task file (line 95 of
+    # fixtures/tasks/seed_4_8.yaml is `  park:`), and a refusal with a line keeps its own
+    spec = load_task(SEED_TASK)
+    assert SEED_TASK.read_text(encoding="utf-8").splitlines()[94] == "  park:"
+    with pytest.raises(SpecError) as refused, spec.lines_on_errors():
+        raise SpecError("manipulator.park", "the fingers touch the arm")
+    assert (refused.value.line, str(refused.value)) == (
+        95,
+        "manipulator.park (line 95): the fingers touch the arm",
+    )
+    with pytest.raises(SpecError) as kept, spec.lines_on_errors():
+        raise SpecError("manipulator.park", "elsewhere", 7)
+    assert kept.value.line == 7
+
+
 def test_coupled_constraint_units() -> None:
     text = GOOD.replace(
         "rz: 5 deg",

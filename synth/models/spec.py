@@ -22,11 +22,14 @@ lines.
 
 from __future__ import annotations
 
+import contextlib
 import re
+from collections.abc import Iterator
 from typing import Annotated, Any, Literal
 
 from pydantic import BeforeValidator, Field, PrivateAttr, field_validator, model_validator
 
+from synth.exceptions import SpecError
 from synth.models.contacts import ContactSpec
 from synth.models.manipulator import ManipulatorSpec
 from synth.models.spec_fields import (
@@ -316,6 +319,20 @@ class TaskSpec(SpecModel):
     def line_of(self, field: str) -> int | None:
         """The YAML line of ``field`` (``'frames[2].pose'``), or of its nearest parent given."""
         return line_of(parse_path(field), self._lines)
+
+    @contextlib.contextmanager
+    def lines_on_errors(self) -> Iterator[None]:
+        """A :class:`SpecError` raised inside without a line gets its field's line here.
+
+        For checks made after loading by code that knows the field but not the file (the
+        service's model paths, the park): their refusals had no line where every other has.
+        """
+        try:
+            yield
+        except SpecError as error:
+            if error.line is not None:
+                raise
+            raise SpecError(error.path, error.detail, self.line_of(error.path)) from None
 
     @property
     def steps(self) -> tuple[InsertionSpec, ...]:

@@ -277,7 +277,7 @@ def plan_context(
     counters = PlanCounters()
     counters.ik += 1
     if start is None:
-        try:
+        with spec.lines_on_errors():
             q_park = park_configuration(
                 arm,
                 park,
@@ -285,10 +285,6 @@ def plan_context(
                 manip.park.al_name,
                 opening=hand_openings(pin_shape.diameter, opts)[0],
             )
-        except SpecError as exc:  # the park's line in the task file
-            if exc.line is not None:
-                raise
-            raise SpecError(exc.path, exc.detail, spec.line_of(exc.path)) from None
     else:
         q_park = np.array(start, dtype=float)
     d_i = start_depth(graph, insertion.start_hole, insertion.pin)
