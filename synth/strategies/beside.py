@@ -319,12 +319,17 @@ def support_landing_problem(ctx: PlanContext, where: Landing) -> str | None:
     return None
 
 
+def _leaves_face(ctx: PlanContext, places: shapely.Geometry | None) -> bool:
+    """Whether ``places`` (face frame) reach off the outline of the hole's face."""
+    shape = ctx.graph.node(ctx.hole_shape.surface).shape
+    if not isinstance(shape, SurfaceShape) or places is None:
+        return False
+    return not shapely.Polygon(shape.outline).covers(places)
+
+
 def _can_go_beside(ctx: PlanContext, where: Landing) -> bool:
     """Whether some attempt may bring the pin down off the hole's face (module docstring)."""
-    shape = ctx.graph.node(ctx.hole_shape.surface).shape
-    if not isinstance(shape, SurfaceShape):
-        return False
-    return not shapely.Polygon(shape.outline).covers(where.region)
+    return _leaves_face(ctx, where.region)
 
 
 def first_attempt_may_go_beside(ctx: PlanContext, where: Landing) -> bool:
@@ -335,11 +340,7 @@ def first_attempt_may_go_beside(ctx: PlanContext, where: Landing) -> bool:
     world aborts though the search would find the hole (a box known to ±1 in, ±5°, BH1 0.6 cm
     from two edges: 8 of 100 trials "EXPECTED A FORCE HERE", every candidate refused).
     """
-    shape = ctx.graph.node(ctx.hole_shape.surface).shape
-    first = where.attempts[0][1] if where.attempts else None
-    if not isinstance(shape, SurfaceShape) or first is None:
-        return False
-    return not shapely.Polygon(shape.outline).covers(first)
+    return _leaves_face(ctx, where.attempts[0][1] if where.attempts else None)
 
 
 def false_seat_problem(ctx: PlanContext, where: Landing) -> str | None:
