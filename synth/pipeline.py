@@ -315,16 +315,25 @@ MAX_SEQUENCE_ATTEMPTS = 4
 strategy and the sequence is planned again."""
 
 
-def _step_check(
-    base_dir: Path | None,
-    banned: dict[int, dict[str, str | None]],
-    failures: dict[tuple[int, str], str] | None = None,
-) -> StepCheck:
+@dataclass(frozen=True)
+class StepBan:
+    """A step's strategy refused for the proof of its sequence, and why.
+
+    The sequence failed its proof in that step, or passed it with a search that missed by its
+    gaps. ``refuted``: the belief the proof refuted (:func:`_refuted`); ``reason``: how it
+    failed, the proof's reason (its first failing trial, line and sampled errors; empty for a
+    proof that passed).
+    """
+
+    refuted: str | None
+    reason: str
+
+
+def _step_check(base_dir: Path | None, banned: dict[int, dict[str, StepBan]]) -> StepCheck:
     """Accept a step's strategy by the nominal replay of its program; return where it ends.
 
     Strategies in ``banned[step]`` failed a proof of the whole sequence and are refused, with
-    the belief that proof refuted (:func:`_refuted`) and how it failed (``failures``, the
-    proof's reason: its first failing trial, line and sampled errors).
+    their :class:`StepBan`.
     """
 
     def check(
@@ -333,14 +342,13 @@ def _step_check(
         q_start: NDArray[np.float64] | None,
         strategy: PinInHoleStrategy,
     ) -> tuple[Rejection | None, NDArray[np.float64] | None]:
-        refused = banned.get(index, {})
-        if strategy.name in refused:
+        ban = banned.get(index, {}).get(strategy.name)
+        if ban is not None:
             reason = "the sequence holding it failed its replay proof in this step"
-            why = (failures or {}).get((index, strategy.name))
-            if why:
-                reason = f"{reason} ({why})"
+            if ban.reason:  # a proof that passed but missed by gaps has no reason
+                reason = f"{reason} ({ban.reason})"
             rejection = Rejection(
-                strategy.name, reason, cause="proof", stage="proof", refuted=refused[strategy.name]
+                strategy.name, reason, cause="proof", stage="proof", refuted=ban.refuted
             )
             return rejection, None
         graph = believed_graph(task)
@@ -428,8 +436,7 @@ def _synthesize_sequence(
 ) -> SequenceSynthesis:
     proof_options = opts.proof or ProofOptions.for_task(spec)
     graph = believed_graph(spec)
-    banned: dict[int, dict[str, str | None]] = {}
-    failures: dict[tuple[int, str], str] = {}
+    banned: dict[int, dict[str, StepBan]] = {}
     attempts: list[CandidateProof] = []
     plan_options = opts.plan
     fallback: SequenceSynthesis | None = None  # proven, but a step's search missed by gaps
@@ -438,7 +445,7 @@ def _synthesize_sequence(
             try:
                 sequence = plan_sequence(
                     spec,
-                    _step_check(where, banned, failures),
+                    _step_check(where, banned),
                     options=plan_options,
                     base_dir=where,
                     reuse=opts.reuse,
@@ -484,8 +491,7 @@ def _synthesize_sequence(
             if step is None:
                 break
             refuted = _refuted(proof, step.strategy)
-            banned.setdefault(step.index, {})[step.strategy.name] = refuted
-            failures[step.index, step.strategy.name] = proof.reason()
+            banned.setdefault(step.index, {})[step.strategy.name] = StepBan(refuted, proof.reason())
             if refuted == "dr_ok":  # a miss: every step's search at its parts' lead from now on
                 plan_options = dataclasses.replace(plan_options, at_lead=True)
     if fallback is not None:

@@ -28,6 +28,7 @@ from synth.models.graph import AttributeGraph
 from synth.models.loader import load_task, parse_task
 from synth.pipeline import (
     SequenceSynthesis,
+    StepBan,
     SynthesisOptions,
     _step_check,
     synthesize,
@@ -539,7 +540,7 @@ def test_a_step_refused_after_a_failed_proof_says_how_the_proof_failed() -> None
     spec = load_task(SEED_TASK)
     strategy = plan_task(spec).strategy
     why = "replay proof failed: 97 of 100 trials succeeded; first failure trial 7: abort at line 60"
-    check = _step_check(TASKS, {1: {strategy.name: None}}, {(1, strategy.name): why})
+    check = _step_check(TASKS, {1: {strategy.name: StepBan(None, why)}})
     rejection, where = check(1, spec, None, strategy)
     assert where is None and isinstance(rejection, Rejection)
     assert rejection.reason == (
