@@ -76,6 +76,7 @@ __all__ = [
     "Top",
     "false_seat_problem",
     "first_attempt_may_go_beside",
+    "may_go_beside",
     "solid_tops",
     "support_landing_problem",
     "support_landings",
@@ -304,7 +305,7 @@ def support_landing_problem(ctx: PlanContext, where: Landing) -> str | None:
     A top met before the hand lands (less than ``h`` below the face) at a depth u with
     |d_f − u| ≤ t + Δz (module docstring); None if there is none.
     """
-    if not _can_go_beside(ctx, where):
+    if not may_go_beside(ctx, where):
         return None
     tops, _ = support_landings(ctx, where, where.hand_height)
     for top, depth in tops:
@@ -327,7 +328,7 @@ def _leaves_face(ctx: PlanContext, places: shapely.Geometry | None) -> bool:
     return not shapely.Polygon(shape.outline).covers(places)
 
 
-def _can_go_beside(ctx: PlanContext, where: Landing) -> bool:
+def may_go_beside(ctx: PlanContext, where: Landing) -> bool:
     """Whether some attempt may bring the pin down off the hole's face (module docstring)."""
     return _leaves_face(ctx, where.region)
 
@@ -353,7 +354,7 @@ def false_seat_problem(ctx: PlanContext, where: Landing) -> str | None:
     does when d_f − t − Δz < L_t (the window of a miss on the face, d_f − Δz > t, with d_f less
     the taper).
     """
-    if not _can_go_beside(ctx, where):
+    if not may_go_beside(ctx, where):
         return None
     window = (
         f"within {where.window()} of d_f = {100 * where.d_f:.3g} cm: a miss would pass for an "

@@ -42,7 +42,9 @@ __all__ = [
     "AxisPath",
     "axis_heights",
     "path_bow",
+    "pin_deviation",
     "plan_axis_path",
+    "split_at_height",
 ]
 
 BOW_FRACTION = 0.1
@@ -140,3 +142,82 @@ def plan_axis_path(
             if bow <= tolerance:
                 return made
     return best
+
+
+def _end_height(
+    arm: Arm, q: Configuration, hole_from_world: pin.SE3, hand_from_end: pin.SE3
+) -> float:
+    """Height [m] of the pin end along the hole axis (hole frame z) with the arm at ``q``."""
+    return float((hole_from_world * arm.forward(q) * hand_from_end).translation[2])
+
+
+def split_at_height(
+    arm: Arm,
+    configurations: Sequence[Configuration],
+    hole_from_world: pin.SE3,
+    hand_from_end: pin.SE3,
+    height: float,
+    bisections: int = 40,
+) -> tuple[list[Configuration], list[Configuration]]:
+    """The joint-space polyline cut where the pin end first comes down to ``height`` [m].
+
+    Returns (the path down to the cut, the path from it on), the cut configuration ending the
+    first and starting the second; the cut lies on the polyline (``q_k + s·(q_(k+1) − q_k)``,
+    ``s`` bisected to 2⁻⁴⁰ on the first segment whose end is at or below ``height``). A path
+    that never comes that low is all above (the second part empty); one that starts at or
+    below it is all below.
+    """
+    path = [np.asarray(q, dtype=float) for q in configurations]
+    heights = [_end_height(arm, q, hole_from_world, hand_from_end) for q in path]
+    if heights[0] <= height:
+        return [], path
+    for k in range(1, len(path)):
+        if heights[k] > height:
+            continue
+        q0, delta = path[k - 1], path[k] - path[k - 1]
+        above, below = 0.0, 1.0
+        for _ in range(bisections):
+            middle = 0.5 * (above + below)
+            if _end_height(arm, q0 + middle * delta, hole_from_world, hand_from_end) > height:
+                above = middle
+            else:
+                below = middle
+        cut = q0 + below * delta
+        return [*path[:k], cut], [cut, *path[k:]]
+    return path, []
+
+
+def pin_deviation(
+    arm: Arm,
+    configurations: Sequence[Configuration],
+    hole_from_world: pin.SE3,
+    hand_from_end: pin.SE3,
+    on_axis: Callable[[float], pin.SE3],
+    length: float,
+    radius: float,
+    samples: int = SAMPLES,
+) -> float:
+    """How far [m] any point of the pin moves from its pose on the path to its pose on the axis.
+
+    At each of ``samples`` + 1 points of every segment the commanded pin end frame
+    ``E = hole_from_world · FK(q) · hand_from_end`` is compared with ``A = on_axis(E_z)``, the
+    end frame on the hole axis at the same height (the turn the program gives it about the
+    axis). A point ``x`` of the pin (end frame) moves by
+    ``|E·x − A·x| ≤ |E·c − A·c| + ‖R_E − R_A‖₂·|x − c|`` for any ``c`` on its axis. With ``c``
+    the end or the far end ``(0, 0, length)`` (z leaves the hole along the pin,
+    :func:`~synth.strategies.context.pin_end_frame`) and ``|x − c| ≤ radius`` from the axis,
+    the larger of ``|E·c − A·c|`` at the two ends (affine along the axis), plus
+    ``‖R_E − R_A‖₂·radius``, bounds it; ``‖R_E − R_A‖₂ = √(3 − tr R_EᵀR_A)``. Between samples
+    the pin moves continuously: as :func:`path_bow`, a sampled maximum, not a certificate.
+    """
+    ends = (np.zeros(3), np.array([0.0, 0.0, length]))
+    worst = 0.0
+    for q0, q1 in itertools.pairwise(configurations):
+        delta = np.asarray(q1) - np.asarray(q0)
+        for s in np.linspace(0.0, 1.0, samples + 1):
+            end = hole_from_world * arm.forward(q0 + s * delta) * hand_from_end
+            axis = on_axis(float(end.translation[2]))
+            turn = math.sqrt(max(0.0, 3.0 - float(np.trace(end.rotation.T @ axis.rotation))))
+            moved = max(float(np.linalg.norm(end.act(c) - axis.act(c))) for c in ends)
+            worst = max(worst, moved + turn * radius)
+    return worst

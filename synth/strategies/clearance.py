@@ -81,7 +81,7 @@ from synth.models.arm import (
 from synth.models.arm.bodies import bounding_radius, hull_points
 from synth.models.arm.sweep import Displacement, LinkDisplacement
 from synth.models.graph import AttributeGraph
-from synth.models.spec import WORLD
+from synth.models.spec import WORLD, HoleShape
 from synth.models.uncertainty import Uncertainty
 from synth.models.workcell import TABLE, NominalPoses, PinModel, WorkcellModel
 from synth.strategies.records import Grasp
@@ -89,6 +89,7 @@ from synth.strategies.records import Grasp
 __all__ = [
     "GrossMotionCheck",
     "SeatTurn",
+    "in_hole_displacement",
     "link_displacement",
     "link_margin",
     "solid_displacement",
@@ -143,17 +144,86 @@ def solid_displacement(
     (itself included), at the levers about L's axes of the solid's hull vertices, or at the
     radius about L's origin of its bounding ball (:class:`LinkDisplacement`).
     """
-    world_solid = graph.world_from(frame)
-    links = []
-    for name in graph.ancestors(frame)[:-1]:  # without the world
+    links = _uncertain_links(graph, frame)
+    return Displacement(
+        tuple(_moved_by(graph, name, frame, geometry) for name in _ordered(graph, frame, links))
+    )
+
+
+def _ordered(graph: AttributeGraph, frame: str, links: set[str]) -> list[str]:
+    """``links`` in the order they stand on the way from ``frame`` up to the world."""
+    return [name for name in graph.ancestors(frame)[:-1] if name in links]
+
+
+def _moved_by(
+    graph: AttributeGraph, link: str, frame: str, geometry: coal.CollisionGeometry
+) -> LinkDisplacement:
+    """How far ``link``'s error moves ``frame``'s solid (hull levers or ball, about ``link``)."""
+    block = graph.links[link].uncertainty
+    assert block is not None
+    world_link = graph.world_from(link)
+    link_from_solid = world_link.actInv(graph.world_from(frame))
+    radius = bounding_radius(geometry, link_from_solid)
+    points = hull_points(geometry, link_from_solid)
+    return link_displacement(block, world_link.rotation, radius, points)
+
+
+def in_hole_displacement(
+    graph: AttributeGraph,
+    frame: str,
+    geometry: coal.CollisionGeometry,
+    hole_frame: str,
+    pin_box: NDArray[np.float64],
+) -> Displacement:
+    """How far a point of ``frame``'s solid may be from its believed place against a guided pin.
+
+    Per direction, against a pin in the bore of the hole ``hole_frame``, which holds it on its
+    axis at the depth where the commanded pin end projects onto that axis
+    (:mod:`synth.replay.guided`); ``pin_box`` (8, 3) [m] are the corners of a box holding the
+    pin there, hole frame. Per uncertain link L, error t + (R − I)p in L's frame:
+
+    * L above the solid only moves it (:func:`solid_displacement`'s term);
+    * L above both moves them as one rigid body but for the pin's depth, which follows the
+      command: their gap keeps but for the hole's motion along its axis a, at most
+      Σ_i |a·l_i|·t_i + (R − I)h's along ±a (``l_i`` L's axes, ``h`` the hole);
+    * L above the hole only moves the pin across the axis by t's part across it (each of the
+      hole's x, y bounded by Σ_i |x·l_i|·t_i), the command keeping its depth, and turns it
+      with the bore by (R − I)p at the levers of ``pin_box``'s corners.
+
+    A solid on the hole's part (a step of it, a block on it) thus keeps only the hole's error
+    along the axis: a block standing 0.23 cm of plate beyond the bore was charged the plate's
+    ±0.05 in, ±0.5° and every insertion refused.
+    """
+    solid_links = _uncertain_links(graph, frame)
+    hole_links = _uncertain_links(graph, hole_frame)
+    world_hole = graph.world_from(hole_frame)
+    hole_axes = world_hole.rotation
+    links = [
+        _moved_by(graph, name, frame, geometry)
+        for name in _ordered(graph, frame, solid_links - hole_links)
+    ]
+    along = 0.0
+    for name in _ordered(graph, hole_frame, hole_links):
         block = graph.links[name].uncertainty
-        if block is None or not block.bounds():
-            continue
+        assert block is not None
         world_link = graph.world_from(name)
-        link_from_solid = world_link.actInv(world_solid)
-        radius = bounding_radius(geometry, link_from_solid)
-        points = hull_points(geometry, link_from_solid)
-        links.append(link_displacement(block, world_link.rotation, radius, points))
+        link_from_hole = world_link.actInv(world_hole)
+        moved = link_displacement(block, world_link.rotation, 0.0)
+        across = np.abs(hole_axes.T @ world_link.rotation) @ moved.translation  # hole frame
+        if name in solid_links:
+            hole = link_from_hole.translation
+            at_hole = replace(moved, radius=float(np.linalg.norm(hole)), points=hole[None, :])
+            axis = hole_axes[:, 2]
+            along += max(at_hole.support(axis), at_hole.support(-axis))
+            continue
+        links.append(
+            LinkDisplacement(hole_axes, across * np.array([1.0, 1.0, 0.0]), np.zeros(3), 0.0)
+        )
+        corners = np.array([link_from_hole.act(c) for c in pin_box])
+        radius = float(np.max(np.linalg.norm(corners, axis=1)))
+        links.append(replace(moved, translation=np.zeros(3), radius=radius, points=corners))
+    if along > 0.0:
+        links.append(LinkDisplacement(hole_axes, np.array([0.0, 0.0, along]), np.zeros(3), 0.0))
     return Displacement(tuple(links))
 
 
@@ -420,6 +490,53 @@ class GrossMotionCheck:
             scene = holding.with_held(holding.held, allowed)
             self._scenes[key] = scene
         return scene
+
+    def held_apart(
+        self, grasp: Grasp, part: str | None, bottom: str | None = None
+    ) -> tuple[CollisionScene, CollisionScene]:
+        """:meth:`fine`'s pairs in two scenes, to be swept with different margins.
+
+        The arm's bodies' (the held pin's pairs allowed) and the held pin's (every other pair
+        allowed).
+        """
+        scene = self.fine(grasp, part, bottom)
+        key: tuple[object, ...] = ("held apart", id(scene))
+        arm = self._scenes.get(key)
+        held = self.carried.name
+        if arm is None:
+            pin_pairs = [p for p in scene.pairs if held in p]
+            arm = scene.with_held(scene.held, [*scene.allowed, *pin_pairs])
+            self._scenes[key] = arm
+        key_pin = ("held apart, pin", id(scene))
+        held_scene = self._scenes.get(key_pin)
+        if held_scene is None:
+            arm_pairs = [p for p in scene.pairs if held not in p]
+            held_scene = scene.with_held(scene.held, [*scene.allowed, *arm_pairs])
+            self._scenes[key_pin] = held_scene
+        return arm, held_scene
+
+    def in_hole_options(
+        self, graph: AttributeGraph, hole_frame: str, off_axis: LinkDisplacement
+    ) -> SweepOptions:
+        """Margins of the held pin's pairs while the hole guides it (its end below the face).
+
+        Each solid keeps :func:`in_hole_displacement`, plus ``off_axis``: how far the pin on
+        the planned path may be from the pin on the hole's axis at the same depth (the path's
+        deviation from the axis, :func:`~synth.strategies.bow.pin_deviation`).
+        """
+        # the pin on the axis, its end from the mouth down to the hole's depth: within this box
+        hole = graph.node(hole_frame).shape
+        depth = hole.depth if isinstance(hole, HoleShape) else 0.0
+        r, length = self.carried.radius, self.carried.shape.length
+        pin_box = np.array(
+            [[sx * r, sy * r, z] for sx in (-1, 1) for sy in (-1, 1) for z in (-depth, length)]
+        )
+        displacements = {}
+        for obstacle in self.solids:
+            frame = self.solid_frames.get(obstacle.name, WORLD)
+            moved = in_hole_displacement(graph, frame, obstacle.geometry, hole_frame, pin_box)
+            displacements[obstacle.name] = Displacement((*moved.links, off_axis))
+        return SweepOptions(displacements=displacements, rigid=self.fine_motion.rigid)
 
     def letting_go(
         self,

@@ -7,7 +7,9 @@ and search move would stop on the palm. So each refined candidate's fine motions
 against the believed workcell with the hand, fingers, palm, wrist and held pin, in the nominal
 configurations the program moves through (each solved nearest the one before it):
 
-1. insertion: approach point → vias above the seat → seat (the pin end at −d_f), swept;
+1. insertion: approach point → vias above the seat → seat (the pin end at −d_f), swept; where
+   no attempt can bring the pin down off the face, the held pin below the face is in the bore
+   and is swept there with what moves each solid against the bore (:func:`_guided_insertion`);
 2. search: every point the search loop tries (the pattern filtered by the record's ±dx × ±dy,
    turned by ζ), with the pin end on the surface there, where a miss stops;
 3. tap: tap via → the tapping place on the surface, swept;
@@ -44,7 +46,8 @@ from synth.models.arm import CollisionScene, SweepOptions
 from synth.models.arm.sweep import LinkDisplacement
 from synth.models.spec import BoxShape
 from synth.strategies.approach import Candidate, getting_clear, hand_at, pin_world
-from synth.strategies.context import Configuration, PlanContext
+from synth.strategies.bow import pin_deviation, split_at_height
+from synth.strategies.context import Configuration, PlanContext, end_from_hand
 from synth.strategies.records import PinInHoleStrategy
 from synth.strategies.relations import hole_frame_offset
 from synth.strategies.search import inside, pattern_points
@@ -92,9 +95,15 @@ def _through_bottom(ctx: PlanContext, part: str) -> str | None:
 
 
 def fine_motion_obstruction(
-    ctx: PlanContext, cand: Candidate, strategy: PinInHoleStrategy
+    ctx: PlanContext, cand: Candidate, strategy: PinInHoleStrategy, beside: bool = True
 ) -> str | None:
-    """Why one of ``strategy``'s fine motions is obstructed (module docstring), or None."""
+    """Why one of ``strategy``'s fine motions is obstructed (module docstring), or None.
+
+    ``beside``: whether an attempt may bring the pin down off the hole's face
+    (:mod:`~synth.strategies.beside`); where none can, a pin below the face is in the hole
+    and the insertion's held pin is swept there as the hole guides it
+    (:func:`_guided_insertion`).
+    """
     gross = ctx.gross
     grasp = strategy.pickup.grasp
     part = gross.part_of(ctx.graph, ctx.hole_frame)
@@ -109,8 +118,12 @@ def fine_motion_obstruction(
         vias = [q for z, q in inner if z > -d_f]
     insertion = [cand.q_hole_approach, *vias, cand.q_destination]
     bottom = None if part is None else _through_bottom(ctx, part)
-    inserting = scene if bottom is None else gross.fine(grasp, part, bottom)
-    reason = _sweep(ctx, inserting, insertion, f"insertion into {hole}", options)
+    motion = f"insertion into {hole}"
+    if beside or part is None:
+        inserting = scene if bottom is None else gross.fine(grasp, part, bottom)
+        reason = _sweep(ctx, inserting, insertion, motion, options)
+    else:
+        reason = _guided_insertion(ctx, cand, strategy, insertion, bottom, options)
     if reason is not None:
         return reason
     for x, y in search_offsets(strategy):
@@ -164,6 +177,61 @@ def fine_motion_obstruction(
         if reason is not None:
             return reason
     return None
+
+
+def _guided_insertion(
+    ctx: PlanContext,
+    cand: Candidate,
+    strategy: PinInHoleStrategy,
+    insertion: Sequence[Configuration],
+    bottom: str | None,
+    options: SweepOptions,
+) -> str | None:
+    """Why the insertion is obstructed, for a pin that comes below the face only in the hole.
+
+    The arm's bodies are swept along the whole path with the fine motions' margins, and so is
+    the held pin down to where its end may still be above the true face (Δa below the believed
+    one, Δa the hole's error along its axis). From Δa above the believed face on, the pin can
+    be that low only in the bore (no attempt goes beside the face), which guides it: each
+    solid keeps only what moves it against the pin in the bore
+    (:meth:`~synth.strategies.clearance.GrossMotionCheck.in_hole_options`), and the pin on the
+    planned path stands off the pin on the axis by the path's sampled deviation
+    (:func:`~synth.strategies.bow.pin_deviation`).
+    """
+    gross = ctx.gross
+    grasp = strategy.pickup.grasp
+    part = gross.part_of(ctx.graph, ctx.hole_frame)
+    arm_scene, pin_scene = gross.held_apart(grasp, part, bottom)
+    motion = f"insertion into {ctx.hole_al}"
+    reason = _sweep(ctx, arm_scene, insertion, motion, options)
+    if reason is not None:
+        return reason
+    bounds = ctx.hole_errors.certified
+    axis = ctx.world_hole.rotation[:, 2]
+    world_error = np.array([bounds.dx.magnitude, bounds.dy.magnitude, bounds.dz.magnitude])
+    along = float(np.abs(axis) @ world_error)  # Δa: the box's support along the axis
+    hole_from_world = ctx.world_hole.inverse()
+    hand_from_end = end_from_hand(ctx, grasp).inverse()
+    above, _ = split_at_height(ctx.arm, insertion, hole_from_world, hand_from_end, -along)
+    _, below = split_at_height(ctx.arm, insertion, hole_from_world, hand_from_end, along)
+    if len(above) > 1:
+        reason = _sweep(ctx, pin_scene, above, motion, options)
+        if reason is not None:
+            return reason
+    if len(below) < 2:
+        return None
+    deviation = pin_deviation(
+        ctx.arm,
+        below,
+        hole_from_world,
+        hand_from_end,
+        lambda z: hole_frame_offset(strategy.phi, (0.0, 0.0, z)),
+        ctx.pin_shape.length,
+        0.5 * ctx.pin_shape.diameter,
+    )
+    off_axis = LinkDisplacement(ctx.world_hole.rotation, np.full(3, deviation), np.zeros(3), 0.0)
+    in_hole = gross.in_hole_options(ctx.graph, ctx.hole_frame, off_axis)
+    return _sweep(ctx, pin_scene, below, motion, in_hole)
 
 
 def seated_hand_displacement(ctx: PlanContext) -> LinkDisplacement:

@@ -37,6 +37,7 @@ from synth.strategies.approach import Candidate
 from synth.strategies.beside import (
     false_seat_problem,
     first_attempt_may_go_beside,
+    may_go_beside,
     support_landing_problem,
 )
 from synth.strategies.context import PlanContext
@@ -285,10 +286,11 @@ def _fine_motions(
         success_threshold=success_threshold(dz, opts.tau, opts.reading_floor),
         decisions=tuple(decisions),
     )
-    obstructed = fine_motion_obstruction(ctx, cand, strategy)
+    where = landing(ctx, strategy)
+    beside = where is None or may_go_beside(ctx, where)
+    obstructed = fine_motion_obstruction(ctx, cand, strategy, beside)
     if obstructed is not None:
         return Rejection(cand.name, obstructed), False
-    where = landing(ctx, strategy)
     if where is not None:
         false_seat = false_seat_problem(ctx, where)
         if false_seat is not None:
