@@ -288,6 +288,9 @@ class GrossMotionCheck:
     hand_error: Uncertainty | None = None
     wrist_radii: dict[str, float] = field(default_factory=dict)
     _scenes: dict[tuple[object, ...], CollisionScene] = field(default_factory=dict)
+    _apart: dict[tuple[object, ...], tuple[CollisionScene, CollisionScene]] = field(
+        default_factory=dict
+    )
 
     @staticmethod
     def of(
@@ -501,19 +504,17 @@ class GrossMotionCheck:
         """
         scene = self.fine(grasp, part, bottom)
         key: tuple[object, ...] = ("held apart", id(scene))
-        arm = self._scenes.get(key)
-        held = self.carried.name
-        if arm is None:
+        apart = self._apart.get(key)
+        if apart is None:
+            held = self.carried.name
             pin_pairs = [p for p in scene.pairs if held in p]
-            arm = scene.with_held(scene.held, [*scene.allowed, *pin_pairs])
-            self._scenes[key] = arm
-        key_pin = ("held apart, pin", id(scene))
-        held_scene = self._scenes.get(key_pin)
-        if held_scene is None:
             arm_pairs = [p for p in scene.pairs if held not in p]
-            held_scene = scene.with_held(scene.held, [*scene.allowed, *arm_pairs])
-            self._scenes[key_pin] = held_scene
-        return arm, held_scene
+            apart = (
+                scene.with_held(scene.held, [*scene.allowed, *pin_pairs]),
+                scene.with_held(scene.held, [*scene.allowed, *arm_pairs]),
+            )
+            self._apart[key] = apart
+        return apart
 
     def in_hole_options(
         self, graph: AttributeGraph, hole_frame: str, off_axis: LinkDisplacement

@@ -123,7 +123,7 @@ def fine_motion_obstruction(
         inserting = scene if bottom is None else gross.fine(grasp, part, bottom)
         reason = _sweep(ctx, inserting, insertion, motion, options)
     else:
-        reason = _guided_insertion(ctx, cand, strategy, insertion, bottom, options)
+        reason = _guided_insertion(ctx, strategy, insertion, bottom, options)
     if reason is not None:
         return reason
     for x, y in search_offsets(strategy):
@@ -181,7 +181,6 @@ def fine_motion_obstruction(
 
 def _guided_insertion(
     ctx: PlanContext,
-    cand: Candidate,
     strategy: PinInHoleStrategy,
     insertion: Sequence[Configuration],
     bottom: str | None,
@@ -206,10 +205,7 @@ def _guided_insertion(
     reason = _sweep(ctx, arm_scene, insertion, motion, options)
     if reason is not None:
         return reason
-    bounds = ctx.hole_errors.certified
-    axis = ctx.world_hole.rotation[:, 2]
-    world_error = np.array([bounds.dx.magnitude, bounds.dy.magnitude, bounds.dz.magnitude])
-    along = float(np.abs(axis) @ world_error)  # Δa: the box's support along the axis
+    along = seated_hand_displacement(ctx).support(ctx.world_hole.rotation[:, 2])  # Δa
     hole_from_world = ctx.world_hole.inverse()
     hand_from_end = end_from_hand(ctx, grasp).inverse()
     above, _ = split_at_height(ctx.arm, insertion, hole_from_world, hand_from_end, -along)
