@@ -323,6 +323,15 @@ def _seed_with(old: str, new: str) -> tuple[str, int]:
         ("  d_f: 1.71 cm  ", "  d_f: 2.5 cm   ", "insertion.d_f", "2.5 cm is deeper than hole BH1"),
         # the success test tells seated from missed by d_f − d_s: negative limits otherwise
         ("  d_s: 0 cm", "  d_s: 1.8 cm", "insertion.d_s", "1.8 cm must be less than d_f = 1.71"),
+        # with d_f left out, the derived one: min(1.71 cm deep, 5.08 − 0.34 cm of pin) (the
+        # planner refused every candidate as "a tap would not narrow Δz")
+        (
+            "  d_f: 1.71 cm                                            # measured by the seed "
+            "(L2582–2585)\n  d_s: 0 cm",
+            "  d_s: 1.8 cm",
+            "insertion.d_s",
+            "1.8 cm must be less than d_f = 1.71 cm, derived (the task gives none)",
+        ),
         # the pin stands in RH1; BH2 is a hole of the box, 21 cm away
         ("  start_hole: RH1", "  start_hole: BH2", "insertion.start_hole", "does not stand in BH2"),
         # and the message points at the pin's own frame (PIN1 is frames[9], placed against rh1)

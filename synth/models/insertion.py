@@ -71,6 +71,11 @@ class InsertionParameters:
     lead_height: float = 0.0
 
 
+def derived_d_f(pin_shape: PinShape, hole_shape: HoleShape) -> float:
+    """d_f [m] when the task gives none: ``min(hole depth, pin length − tip taper)``."""
+    return min(hole_shape.depth, pin_shape.length - pin_shape.tip_taper_length)
+
+
 def derive(graph: AttributeGraph, spec: InsertionSpec) -> InsertionParameters:
     """The task's insertion parameters: given values, or the rules in the module docstring."""
     pin_name, hole_name = graph.resolve(spec.pin), graph.resolve(spec.hole)
@@ -83,7 +88,7 @@ def derive(graph: AttributeGraph, spec: InsertionSpec) -> InsertionParameters:
     taper = 0.0 if head_first else pin_shape.tip_taper_length
     reach = pin_shape.length - pin_shape.tip_taper_length
     derived = {
-        "d_f": min(hole_shape.depth, reach),
+        "d_f": derived_d_f(pin_shape, hole_shape),
         "d_s": 0.0,
         "dr_ok": hole_shape.chamfer_width + max(r_hole - r_end, 0.0),
     }

@@ -22,6 +22,7 @@ from synth.exceptions import FrameLookupError, SpecError
 from synth.models.arm.bodies import z_range
 from synth.models.features import Face, box_features, check_contacts
 from synth.models.graph import AttributeGraph
+from synth.models.insertion import derived_d_f
 from synth.models.jamming import fit_problem
 from synth.models.meshes import hole_problem
 from synth.models.spec import WORLD, FrameSpec, HoleShape, InsertionSpec, PinShape, TaskSpec
@@ -221,7 +222,9 @@ def _check_depths(
 
     A pin cannot be pushed deeper than its hole's bottom (the planner read "hand cannot grasp"
     into it), and the success test tells a seated pin from a miss by d_f − d_s (a negative
-    limit otherwise).
+    limit otherwise). ``d_f`` given or derived (:func:`~synth.models.insertion.derived_d_f`):
+    a d_s past the derived depth was planned, and every candidate refused as a tap that could
+    not narrow Δz.
     """
     target = frames.get(ins.hole) or frames.get(ins.hole.upper())
     shape = None if target is None else target.shape
@@ -235,11 +238,16 @@ def _check_depths(
             f"d_f = {100 * ins.d_f:.4g} cm is deeper than hole {ins.hole} "
             f"({100 * shape.depth:.4g} cm deep)",
         )
-    if ins.d_f is not None and ins.d_s is not None and ins.d_s >= ins.d_f:
+    d_f, derived = ins.d_f, ""
+    pin_frame = frames.get(ins.pin) or frames.get(ins.pin.upper())
+    pin_shape = None if pin_frame is None else pin_frame.shape
+    if d_f is None and isinstance(shape, HoleShape) and isinstance(pin_shape, PinShape):
+        d_f, derived = derived_d_f(pin_shape, shape), ", derived (the task gives none)"
+    if d_f is not None and ins.d_s is not None and ins.d_s >= d_f:
         fail(
             (*where, "d_s"),
-            f"d_s = {100 * ins.d_s:.4g} cm must be less than d_f = {100 * ins.d_f:.4g} cm (the "
-            "pin starts into the hole before it is seated)",
+            f"d_s = {100 * ins.d_s:.4g} cm must be less than d_f = {100 * d_f:.4g} cm{derived}: "
+            "the pin would start into the hole before it is seated",
         )
 
 
