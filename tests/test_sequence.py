@@ -37,6 +37,7 @@ from synth.replay.proof import ProofOptions
 from synth.replay.run import machine_for, replay_context, run_machine
 from synth.replay.truth import HandErrors, nominal_world, sample_world
 from synth.report import sequence_summary
+from synth.strategies.context import plan_context
 from synth.strategies.records import Rejection
 from synth.strategies.sequence import (
     _hole_bounds,
@@ -578,3 +579,27 @@ def test_a_plain_list_of_steps_names_the_step_and_its_line(
         parse_task(text)
     assert refused.value.path == f"insertions[1].{field}" and refused.value.line == line
     assert message in refused.value.message
+
+
+@pytest.mark.parametrize("plain", [False, True])
+def test_a_steps_refusal_after_loading_names_the_step_and_its_line(plain: bool) -> None:
+    # A step too shallow for where its pin bottoms out is refused when its context is made,
+    # after loading: it was reported at "insertion.d_f (line 1)", a field the file does not
+    # have (the fifth hunt); the step's own field and line, in either form of the list
+    import yaml
+
+    data = yaml.safe_load((TASKS / "seed_box_two_pins.yaml").read_text(encoding="utf-8"))
+    if plain:
+        data["insertions"] = data["insertions"]["steps"]
+    steps = data["insertions"] if plain else data["insertions"]["steps"]
+    steps[1]["d_f"] = "1 cm"  # BH2 is 1.71 cm deep, the pin 5.08 cm long
+    text = yaml.safe_dump(data, sort_keys=False)
+    lines = text.splitlines()
+    second = next(n for n, t in enumerate(lines, 1) if t.strip() == "- pin: PIN2")
+    line = next(n for n, t in enumerate(lines, 1) if n > second and t.strip() == "d_f: 1 cm")
+    spec = parse_task(text)
+    with pytest.raises(SpecError) as refused:
+        plan_context(spec.step(spec.steps[1]))
+    prefix = "insertions[1]" if plain else "insertions.steps[1]"
+    assert (refused.value.path, refused.value.line) == (f"{prefix}.d_f", line)
+    assert "d_f = 1 cm is shallower than where PIN2 seats in BH2" in refused.value.detail

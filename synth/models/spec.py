@@ -282,6 +282,9 @@ class TaskSpec(SpecModel):
     frames: tuple[FrameSpec, ...]
     _lines: dict[PathKey, int] = PrivateAttr(default_factory=dict)
     """The YAML line of each field of the task's text (none for a spec built in Python)."""
+    _step_path: str | None = PrivateAttr(default=None)
+    """Where a step's ``insertion`` stands in the text, ``insertions.steps[i]`` or, given as a
+    plain list, ``insertions[i]`` (:meth:`step`)."""
     insertion: InsertionSpec | None = None
     insertions: SequenceSpec | None = None
     manipulator: ManipulatorSpec | None = None
@@ -316,23 +319,36 @@ class TaskSpec(SpecModel):
         """Keep the YAML lines of the task's fields, for errors found after loading."""
         self._lines = dict(lines)
 
+    def field_path(self, field: str) -> str:
+        """``field`` as the task's text names it.
+
+        A step's single task (:meth:`step`) has its insertion at ``insertion``; the text has it
+        at ``insertions.steps[i]``, where its refusals must point.
+        """
+        if self._step_path is not None and (field == "insertion" or field.startswith("insertion.")):
+            return self._step_path + field[len("insertion") :]
+        return field
+
     def line_of(self, field: str) -> int | None:
         """The YAML line of ``field`` (``'frames[2].pose'``), or of its nearest parent given."""
-        return line_of(parse_path(field), self._lines)
+        return line_of(parse_path(self.field_path(field)), self._lines)
 
     @contextlib.contextmanager
     def lines_on_errors(self) -> Iterator[None]:
         """A :class:`SpecError` raised inside without a line gets its field's line here.
 
         For checks made after loading by code that knows the field but not the file (the
-        service's model paths, the park): their refusals had no line where every other has.
+        service's model paths, the park): their refusals had no line where every other has. A
+        step's refusal at ``insertion.…`` is moved to where the text has it
+        (:meth:`field_path`): a step's too-shallow d_f was refused at "insertion.d_f (line 1)".
         """
         try:
             yield
         except SpecError as error:
-            if error.line is not None:
+            path = self.field_path(error.path)
+            if error.line is not None and path == error.path:
                 raise
-            raise SpecError(error.path, error.detail, self.line_of(error.path)) from None
+            raise SpecError(path, error.detail, self.line_of(path)) from None
 
     @property
     def steps(self) -> tuple[InsertionSpec, ...]:
@@ -348,7 +364,17 @@ class TaskSpec(SpecModel):
 
     def step(self, insertion: InsertionSpec) -> TaskSpec:
         """The single-insertion task of one step (the same frames, arm and proof)."""
-        return self.model_copy(update={"insertion": insertion, "insertions": None})
+        single = self.model_copy(update={"insertion": insertion, "insertions": None})
+        if self.insertions is not None:
+            steps = self.insertions.steps
+            index = next((i for i, s in enumerate(steps) if s is insertion), None)
+            if index is None and insertion in steps:
+                index = steps.index(insertion)
+            if index is not None:
+                plain = ("insertions", index) in self._lines  # the text's plain list of steps
+                where = f"insertions[{index}]" if plain else f"insertions.steps[{index}]"
+                single._step_path = where
+        return single
 
     def with_distribution(self, distribution: Distribution) -> TaskSpec:
         """The task with every error block (frames and hand) sampled from ``distribution``.

@@ -254,19 +254,21 @@ def plan_context(
     ``start`` is where the arm begins (a later step of a sequence starts where the last one
     ended); default: its configuration at the park frame (:func:`park_configuration`).
     """
-    _require(spec)
+    with spec.lines_on_errors():
+        _require(spec)
     graph = believed_graph(spec)  # objects located by contacts: derived pose and block
     spec = graph.spec
     assert spec.insertion is not None and spec.manipulator is not None
     opts = options or PlanOptions()
     insertion = derive(graph, spec.insertion)
-    refuse_unprovable(
-        insertion,
-        graph.al_names[insertion.pin],
-        graph.al_names[insertion.hole],
-        opts.reading_floor,
-        spec.line_of,
-    )
+    with spec.lines_on_errors():  # a step's fields stand at insertions.steps[i]
+        refuse_unprovable(
+            insertion,
+            graph.al_names[insertion.pin],
+            graph.al_names[insertion.hole],
+            opts.reading_floor,
+            spec.line_of,
+        )
     assert insertion.start_hole is not None
     pin_shape = graph.nodes[insertion.pin].shape
     hole_shape = graph.nodes[insertion.hole].shape
