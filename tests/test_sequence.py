@@ -69,8 +69,11 @@ def test_insertions_forms_and_their_errors():
     both = text.replace(
         "insertions:\n", "insertion: {pin: PIN1, hole: BH1, start_hole: RH1}\ninsertions:\n"
     )
-    with pytest.raises(SpecError, match="not both"):
+    with pytest.raises(SpecError, match="not both") as refused:
         parse_task(both)
+    # at the sequence's own line, not at the task's root (line 1; the fifth hunt)
+    line = both.splitlines().index("insertions:") + 1
+    assert (refused.value.path, refused.value.line) == ("insertions", line)
 
 
 def test_a_one_step_list_is_the_single_insertion():

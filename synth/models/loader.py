@@ -83,6 +83,13 @@ def parse_task(
 def validate_task(data: dict[str, Any], lines: dict[PathKey, int] | None = None) -> TaskSpec:
     """Validate an already-parsed mapping (e.g. a JSON request body) into a :class:`TaskSpec`."""
     lines = _plain_steps_lines(data, lines or {})
+    if "insertion" in data and "insertions" in data:
+        # TaskSpec refuses it too, at the task's root: here its field and line are known
+        raise SpecError(
+            "insertions",
+            "give 'insertion' (one step) or 'insertions' (a sequence), not both",
+            line_of(("insertions",), lines),
+        )
     try:
         spec = TaskSpec.model_validate(data)
     except ValidationError as exc:
