@@ -8,6 +8,7 @@ per-trial outcomes, and the geometry of a miss (BH1's displacement by the box er
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
@@ -103,3 +104,12 @@ def test_cli_writes_the_picture_and_needs_trials(tmp_path: Path, program: str) -
     assert main([*args, "--trials", "4"]) == 0
     assert SvgFigure(out.read_bytes()).has("mc-0-1")
     assert main([*args, "--trials", "0"]) == 2
+
+
+def test_a_title_with_dollars_is_drawn_as_written(run) -> None:
+    # mathtext between two $ made the picture fail ("$x^$"; exit 70 from synth replay --svg)
+    report, errors, _ = run
+    picture = montecarlo_picture(report, errors, replay_graph(load_task(SEED_TASK)))
+    title = "tap.al on $x^$"
+    svg = SvgFigure(figure_bytes(draw_montecarlo(dataclasses.replace(picture, title=title))))
+    assert any(t.startswith(title) for t in svg.texts())

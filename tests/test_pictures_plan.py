@@ -8,6 +8,7 @@ L2753), the footprint's definition (a box ±Δx × ±Δy turned by ζ), and the 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 from pathlib import Path
@@ -172,3 +173,13 @@ def test_the_readme_picture_is_the_seeds_plan(seed: Synthesis) -> None:
     drawn = committed.to_data("top-view", committed.uses("search-points"))
     expected = CM * plan_picture(seed.strategy, seed.graph).search_points
     np.testing.assert_allclose(drawn, expected, atol=2e-3)
+
+
+@pytest.mark.parametrize("name", ["$\\foo$", "$x^$", "cost $5 and $6"])
+def test_a_task_name_with_dollars_is_drawn_as_written(seed: Synthesis, name: str) -> None:
+    # Matplotlib reads text between two $ as mathtext: "$\foo$" and "$x^$" failed to draw
+    # (a 500 from the service, exit 70 from the CLI; the fifth hunt) and "cost $5 and $6"
+    # came out as "cost 5 6: plan … and"
+    picture = dataclasses.replace(plan_picture(seed.strategy, seed.graph), task=name)
+    titles = [t for t in SvgFigure(figure_bytes(draw_plan(picture))).texts() if ": plan " in t]
+    assert titles == [f"{name}: plan {seed.strategy.name}"]

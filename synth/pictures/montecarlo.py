@@ -24,6 +24,7 @@ from matplotlib.patches import Rectangle
 from numpy.typing import NDArray
 
 from synth.models.graph import AttributeGraph
+from synth.pictures.render import literal_text
 from synth.replay.report import OUTCOMES, ReplayReport, RunReport
 
 __all__ = [
@@ -127,6 +128,7 @@ def montecarlo_picture(
     )
 
 
+@literal_text
 def draw_montecarlo(picture: MonteCarloPicture) -> Figure:
     """Pairwise scatter of the sampled errors coloured by outcome (module docstring)."""
     params = picture.parameters

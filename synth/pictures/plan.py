@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 
 from synth.models.graph import AttributeGraph
 from synth.models.spec import HoleShape, PinShape
+from synth.pictures.render import literal_text
 from synth.strategies.records import ErrorFootprint, PinInHoleStrategy
 from synth.strategies.search import inside, pattern_points
 from synth.strategies.tapping import surface_region
@@ -406,6 +407,7 @@ def _side_view(ax: Axes, p: PlanPicture) -> None:
     ax.legend(fontsize=6, loc="upper left", bbox_to_anchor=(0.0, -0.12), frameon=False)
 
 
+@literal_text
 def draw_plan(picture: PlanPicture) -> Figure:
     """The plan figure: top view (left) and side view (right); see the module docstring."""
     fig = Figure(figsize=(11.0, 6.2), layout="constrained")
