@@ -14,6 +14,19 @@ from server.service import SpecKind, _spec_for_server
 __all__ = ["plan_svg_job", "trace_job", "view_html_job"]
 
 
+def pictured_strategy(result: dict[str, Any]) -> str:
+    """The name of the strategy a stored plan's picture draws (``pictured``), "" if none.
+
+    A single insertion's chosen strategy; a sequence's first step's. The sequence's result has
+    no ``strategy``: its name read "", never matched, and every picture re-ran the plan's whole
+    Monte Carlo proof (10 s for a two-step plan of 20 trials, against 1.6 s for a single one).
+    """
+    if "strategy" in result:
+        return str((result["strategy"] or {}).get("name", ""))
+    steps = result.get("steps") or [{}]
+    return str((steps[0].get("strategy") or {}).get("name", ""))
+
+
 def plan_svg_job(
     spec_body: str,
     kind: SpecKind,

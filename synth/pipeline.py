@@ -146,9 +146,9 @@ class Synthesis(_Proven):
     plan: PlanResult
 
     @property
-    def pictured(self) -> tuple[PinInHoleStrategy, AttributeGraph]:
-        """The strategy and world the plan picture draws: the chosen one."""
-        return self.plan.strategy, self.graph
+    def pictured(self) -> tuple[PinInHoleStrategy, AttributeGraph, str]:
+        """The strategy, world and step (none) the plan picture draws: the chosen one."""
+        return self.plan.strategy, self.graph, ""
 
     @property
     def strategy(self) -> PinInHoleStrategy:
@@ -180,10 +180,15 @@ class SequenceSynthesis(_Proven):
     sequence: SequencePlan
 
     @property
-    def pictured(self) -> tuple[PinInHoleStrategy, AttributeGraph]:
-        """The strategy and world the plan picture draws: the first step's, in its world."""
+    def pictured(self) -> tuple[PinInHoleStrategy, AttributeGraph, str]:
+        """The strategy, world and step the plan picture draws: the first step's, in its world.
+
+        The step is named in the picture's title (``step 1 of 2 (PIN1 into PH1)``): it drew
+        the first step's strategy alone and did not say so.
+        """
         first = self.sequence.steps[0]
-        return first.strategy, believed_graph(first.task)
+        step = f"step 1 of {len(self.sequence.steps)} ({first.insertion.pin} into "
+        return first.strategy, believed_graph(first.task), step + f"{first.insertion.hole})"
 
     def to_json(self) -> dict[str, Any]:
         """``synth plan --json`` of a sequence: one record per step, the program, the proof."""

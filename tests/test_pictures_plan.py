@@ -183,3 +183,24 @@ def test_a_task_name_with_dollars_is_drawn_as_written(seed: Synthesis, name: str
     picture = dataclasses.replace(plan_picture(seed.strategy, seed.graph), task=name)
     titles = [t for t in SvgFigure(figure_bytes(draw_plan(picture))).texts() if ": plan " in t]
     assert titles == [f"{name}: plan {seed.strategy.name}"]
+
+
+def test_a_sequences_picture_names_its_step_and_the_service_finds_its_strategy() -> None:
+    # A sequence's picture draws its first step: it did not say so, and the service, reading
+    # a strategy name the sequence's stored result does not have, re-ran the plan's whole
+    # proof on every request (10 s for two steps at 20 trials; the fifth hunt)
+    from server.pictures import pictured_strategy
+    from synth.pipeline import SynthesisOptions, synthesize
+    from synth.replay.proof import ProofOptions
+
+    task = ROOT / "fixtures" / "tasks" / "plate_two_pins_shim.yaml"
+    options = SynthesisOptions(proof=ProofOptions(trials=0, workers=1))
+    result = synthesize(task, options)
+    strategy, graph, step = result.pictured
+    assert step == "step 1 of 2 (PIN1 into PH1)"
+    picture = plan_picture(strategy, graph, step)
+    titles = [t for t in SvgFigure(figure_bytes(draw_plan(picture))).texts() if ": plan " in t]
+    assert titles == [f"plate_two_pins_shim, step 1 of 2 (PIN1 into PH1): plan {strategy.name}"]
+    assert pictured_strategy(result.to_json()) == strategy.name
+    single = synthesized(SEED_TASK)
+    assert pictured_strategy(single.to_json()) == single.pictured[0].name

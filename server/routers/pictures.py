@@ -9,7 +9,7 @@ from fastapi.responses import HTMLResponse, JSONResponse, Response
 
 from server.db import StoredPlan
 from server.deps import Reader, ServiceDep, SettingsDep
-from server.pictures import plan_svg_job, trace_job, view_html_job
+from server.pictures import pictured_strategy, plan_svg_job, trace_job, view_html_job
 from server.schemas import Problem
 from server.service import SpecKind
 from synth.seeds import MAX_SEED
@@ -39,7 +39,7 @@ def _kind(plan: StoredPlan) -> SpecKind:
 async def get_plan_svg(plan_id: str, service: ServiceDep, settings: SettingsDep) -> Response:
     """The ``synth plan --svg`` picture of a stored plan (``image/svg+xml``)."""
     plan = await service.get_plan(plan_id)
-    strategy = (plan.result.get("strategy") or {}).get("name", "")
+    strategy = pictured_strategy(plan.result)
     svg = await service.pool.run(
         plan_svg_job,
         plan.spec_text,

@@ -82,6 +82,8 @@ class PlanPicture:
     pin_radius: float
     heights: tuple[Height, ...]
     decisions: tuple[str, ...]
+    step: str = ""
+    """Which step of a sequence the picture draws (``step 1 of 2 (PIN1 into PH1)``), or ""."""
 
 
 def footprint_corners(dx: float, dy: float, zeta: float) -> NDArray[np.float64]:
@@ -125,8 +127,11 @@ def _heights(strategy: PinInHoleStrategy, graph: AttributeGraph) -> tuple[Height
     return tuple(heights)
 
 
-def plan_picture(strategy: PinInHoleStrategy, graph: AttributeGraph) -> PlanPicture:
-    """The picture's data from a refined strategy and the graph it was planned in."""
+def plan_picture(strategy: PinInHoleStrategy, graph: AttributeGraph, step: str = "") -> PlanPicture:
+    """The picture's data from a refined strategy and the graph it was planned in.
+
+    ``step``: which step of a sequence the strategy is (the title says so), or "".
+    """
     errors: ErrorFootprint | None = strategy.errors
     if errors is None:
         raise ValueError(f"strategy {strategy.name} is not refined: it has no error footprint")
@@ -177,6 +182,7 @@ def plan_picture(strategy: PinInHoleStrategy, graph: AttributeGraph) -> PlanPict
         pin_radius=pin_shape.diameter / 2,
         heights=_heights(strategy, graph),
         decisions=strategy.decisions,
+        step=step,
     )
 
 
@@ -414,5 +420,6 @@ def draw_plan(picture: PlanPicture) -> Figure:
     top, side = fig.subplots(1, 2, width_ratios=(1.4, 1.0))
     _top_view(top, picture)
     _side_view(side, picture)
-    fig.suptitle(f"{picture.task}: plan {picture.strategy}", fontsize=10)
+    step = f", {picture.step}" if picture.step else ""
+    fig.suptitle(f"{picture.task}{step}: plan {picture.strategy}", fontsize=10)
     return fig
