@@ -295,6 +295,19 @@ def test_trials_beyond_the_servers_maximum_is_422(client: TestClient) -> None:
     problem(client.post("/v1/replays", json={"plan_id": "0" * 32, "trials": 10**6}), 422)
 
 
+def test_validating_with_no_trials_is_422(client: TestClient) -> None:
+    # ?trials=0 (validate defaulting to true) was stored "validated": true with no trial run,
+    # its Wilson interval 0–1 (the service hunt, F4); nothing is stored
+    before = client.get("/v1/plans").json()
+    body = problem(client.post("/v1/plans?trials=0", content=SEED_TEXT, headers=YAML), 422)
+    assert body["parameter"] == "trials"
+    assert "trials=0 leaves nothing to validate" in str(body["detail"])
+    batch = {"tasks": [{"spec": SEED_TEXT, "trials": 0}]}
+    (item,) = problem(client.post("/v1/plans/batch", json=batch), 422)["items"]
+    assert (item["status"], item["problem"]["parameter"]) == (422, "tasks[0].trials")
+    assert client.get("/v1/plans").json() == before
+
+
 def test_time_budget_fails_the_job_with_504_and_the_worker_is_replaced(
     client: TestClient,
 ) -> None:

@@ -90,8 +90,20 @@ _SPEC_BODY: dict[str, Any] = {
 
 
 def _options(
-    trials: int, seed: int, try_harder: bool, exhaustive: bool, validate: bool
+    trials: int,
+    seed: int,
+    try_harder: bool,
+    exhaustive: bool,
+    validate: bool,
+    parameter: str = "trials",
 ) -> PlanRequest:
+    if validate and trials == 0:
+        # a plan so asked was stored "validated" with no trial run (Wilson 0–1)
+        raise InvalidRequest(
+            f"{parameter}=0 leaves nothing to validate: give {parameter} ≥ 1, or validate=false "
+            "for the nominal replay alone",
+            parameter=parameter,
+        )
     return PlanRequest(  # trials and seed mean nothing without a replay: same hash
         trials=trials if validate else 0,
         seed=seed if validate else 0,
@@ -155,8 +167,11 @@ async def create_plan(
 def _batch_item(index: int, raw: Any, settings: Settings) -> tuple[bytes, str, PlanRequest]:
     """The body, content type and options of task ``index`` of a batch (422 if invalid)."""
     task = BatchTaskIn.model_validate(raw)
-    trials = checked_trials(task.trials, settings, parameter=f"tasks[{index}].trials")
-    options = _options(trials, task.seed, task.try_harder, task.exhaustive, task.validate_)
+    parameter = f"tasks[{index}].trials"
+    trials = checked_trials(task.trials, settings, parameter=parameter)
+    options = _options(
+        trials, task.seed, task.try_harder, task.exhaustive, task.validate_, parameter
+    )
     if isinstance(task.spec, dict):
         return json.dumps(task.spec).encode(), "application/json", options
     try:
