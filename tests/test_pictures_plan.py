@@ -178,7 +178,7 @@ def test_the_readme_picture_is_the_seeds_plan(seed: Synthesis) -> None:
 @pytest.mark.parametrize("name", ["$\\foo$", "$x^$", "cost $5 and $6"])
 def test_a_task_name_with_dollars_is_drawn_as_written(seed: Synthesis, name: str) -> None:
     # Matplotlib reads text between two $ as mathtext: "$\foo$" and "$x^$" failed to draw
-    # (a 500 from the service, exit 70 from the CLI; the fifth hunt) and "cost $5 and $6"
+    # (a 500 from the service, exit 70 from the CLI; the service hunt) and "cost $5 and $6"
     # came out as "cost 5 6: plan … and"
     picture = dataclasses.replace(plan_picture(seed.strategy, seed.graph), task=name)
     titles = [t for t in SvgFigure(figure_bytes(draw_plan(picture))).texts() if ": plan " in t]
@@ -188,7 +188,7 @@ def test_a_task_name_with_dollars_is_drawn_as_written(seed: Synthesis, name: str
 def test_a_sequences_picture_names_its_step_and_the_service_finds_its_strategy() -> None:
     # A sequence's picture draws its first step: it did not say so, and the service, reading
     # a strategy name the sequence's stored result does not have, re-ran the plan's whole
-    # proof on every request (10 s for two steps at 20 trials; the fifth hunt)
+    # proof on every request (10 s for two steps at 20 trials; the service hunt)
     from server.pictures import pictured_strategy
     from synth.pipeline import SynthesisOptions, synthesize
     from synth.replay.proof import ProofOptions

@@ -71,7 +71,7 @@ def test_insertions_forms_and_their_errors():
     )
     with pytest.raises(SpecError, match="not both") as refused:
         parse_task(both)
-    # at the sequence's own line, not at the task's root (line 1; the fifth hunt)
+    # at the sequence's own line, not at the task's root (line 1; the sixth hunt)
     line = both.splitlines().index("insertions:") + 1
     assert (refused.value.path, refused.value.line) == ("insertions", line)
 
@@ -588,7 +588,7 @@ def test_a_plain_list_of_steps_names_the_step_and_its_line(
 def test_a_steps_refusal_after_loading_names_the_step_and_its_line(plain: bool) -> None:
     # A step too shallow for where its pin bottoms out is refused when its context is made,
     # after loading: it was reported at "insertion.d_f (line 1)", a field the file does not
-    # have (the fifth hunt); the step's own field and line, in either form of the list
+    # have (the sixth hunt); the step's own field and line, in either form of the list
     import yaml
 
     data = yaml.safe_load((TASKS / "seed_box_two_pins.yaml").read_text(encoding="utf-8"))
