@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -80,14 +80,25 @@ def path_bow(
     Only points with the end at or above ``floor`` [m] (hole frame z, −d_f) count.
     """
     worst = 0.0
+    for end in _end_frames(arm, configurations, hole_from_world, hand_from_end, samples):
+        p = np.asarray(end.translation, dtype=float)
+        if p[2] >= floor:
+            worst = max(worst, math.hypot(float(p[0]), float(p[1])))
+    return worst
+
+
+def _end_frames(
+    arm: Arm,
+    configurations: Sequence[Configuration],
+    hole_from_world: pin.SE3,
+    hand_from_end: pin.SE3,
+    samples: int,
+) -> Iterator[pin.SE3]:
+    """The pin end's frame in the hole frame at ``samples`` + 1 points of every segment."""
     for q0, q1 in itertools.pairwise(configurations):
         delta = np.asarray(q1) - np.asarray(q0)
         for s in np.linspace(0.0, 1.0, samples + 1):
-            end = hole_from_world * arm.forward(q0 + s * delta) * hand_from_end
-            p = np.asarray(end.translation, dtype=float)
-            if p[2] >= floor:
-                worst = max(worst, math.hypot(float(p[0]), float(p[1])))
-    return worst
+            yield hole_from_world * arm.forward(q0 + s * delta) * hand_from_end
 
 
 @dataclass(frozen=True, eq=False)
@@ -212,12 +223,9 @@ def pin_deviation(
     """
     ends = (np.zeros(3), np.array([0.0, 0.0, length]))
     worst = 0.0
-    for q0, q1 in itertools.pairwise(configurations):
-        delta = np.asarray(q1) - np.asarray(q0)
-        for s in np.linspace(0.0, 1.0, samples + 1):
-            end = hole_from_world * arm.forward(q0 + s * delta) * hand_from_end
-            axis = on_axis(float(end.translation[2]))
-            turn = math.sqrt(max(0.0, 3.0 - float(np.trace(end.rotation.T @ axis.rotation))))
-            moved = max(float(np.linalg.norm(end.act(c) - axis.act(c))) for c in ends)
-            worst = max(worst, moved + turn * radius)
+    for end in _end_frames(arm, configurations, hole_from_world, hand_from_end, samples):
+        axis = on_axis(float(end.translation[2]))
+        turn = math.sqrt(max(0.0, 3.0 - float(np.trace(end.rotation.T @ axis.rotation))))
+        moved = max(float(np.linalg.norm(end.act(c) - axis.act(c))) for c in ends)
+        worst = max(worst, moved + turn * radius)
     return worst

@@ -123,7 +123,7 @@ def fine_motion_obstruction(
         inserting = scene if bottom is None else gross.fine(grasp, part, bottom)
         reason = _sweep(ctx, inserting, insertion, motion, options)
     else:
-        reason = _guided_insertion(ctx, strategy, insertion, bottom, options)
+        reason = _guided_insertion(ctx, strategy, insertion, part, bottom, options)
     if reason is not None:
         return reason
     for x, y in search_offsets(strategy):
@@ -183,6 +183,7 @@ def _guided_insertion(
     ctx: PlanContext,
     strategy: PinInHoleStrategy,
     insertion: Sequence[Configuration],
+    part: str,
     bottom: str | None,
     options: SweepOptions,
 ) -> str | None:
@@ -199,7 +200,6 @@ def _guided_insertion(
     """
     gross = ctx.gross
     grasp = strategy.pickup.grasp
-    part = gross.part_of(ctx.graph, ctx.hole_frame)
     arm_scene, pin_scene = gross.held_apart(grasp, part, bottom)
     motion = f"insertion into {ctx.hole_al}"
     reason = _sweep(ctx, arm_scene, insertion, motion, options)
